@@ -1,0 +1,211 @@
+//! `caustica render`: one progressive session, a progress bar on stderr, then the image.
+
+use anyhow::{Context, anyhow};
+use caustica_renderer::image::{write_exr, write_png};
+use caustica_renderer::integrators::{self, ParamValues, params_json};
+use caustica_renderer::scene::gltf;
+use caustica_renderer::session::{Session, SessionConfig};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Duration;
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Scene to render (.gltf or .glb).
+    pub scene: PathBuf,
+    /// Output image: .exr (linear float32 RGB with metadata) or .png (tone-mapped sRGB).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Integrator (pt: path tracer).
+    #[arg(long, default_value = "pt")]
+    pub integrator: String,
+    /// Samples per pixel (one per pass); the default when --time is not given is 16.
+    #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u64).range(1..))]
+    pub spp: Option<u64>,
+    /// Render for this many seconds instead of a number of samples.
+    #[arg(long, value_parser = parse_seconds)]
+    pub time: Option<f64>,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub height: u32,
+    /// Seed of every random number; the same seed gives the same image on any thread count.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Maximum path depth (bounces).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Exposure in stops applied to PNG output.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number of seconds"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("'{s}' must be a positive number of seconds"))
+    }
+}
+
+pub enum Failure {
+    /// Bad arguments: exit code 2.
+    Usage(String),
+    /// Everything else: exit code 1.
+    Runtime(anyhow::Error),
+}
+
+impl From<anyhow::Error> for Failure {
+    fn from(e: anyhow::Error) -> Self {
+        Failure::Runtime(e)
+    }
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Format {
+    Exr,
+    Png,
+}
+
+fn output_format(path: &Path) -> Result<Format, Failure> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("exr") => Ok(Format::Exr),
+        Some("png") => Ok(Format::Png),
+        _ => Err(Failure::Usage(format!(
+            "--output {}: the file name must end in .exr or .png",
+            path.display()
+        ))),
+    }
+}
+
+pub fn run(args: &RenderArgs) -> Result<(), Failure> {
+    let format = output_format(&args.output)?;
+    let info = integrators::find(&args.integrator).ok_or_else(|| {
+        let known: Vec<_> = integrators::registry().iter().map(|i| i.name).collect();
+        Failure::Usage(format!(
+            "--integrator {}: unknown (known: {})",
+            args.integrator,
+            known.join(", ")
+        ))
+    })?;
+    let mut given = ParamValues::new();
+    if let Some(d) = args.max_depth {
+        given.insert("max_depth".into(), d as f64);
+    }
+    let params = integrators::resolve_params(info, &given).map_err(Failure::Usage)?;
+    let out_dir = args
+        .output
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !out_dir.is_dir() {
+        return Err(anyhow!(
+            "{}: the output directory {} does not exist",
+            args.output.display(),
+            out_dir.display()
+        )
+        .into());
+    }
+
+    let scene = Arc::new(gltf::load(&args.scene).map_err(|e| anyhow!(e))?);
+    let si = &scene.info;
+    eprintln!(
+        "{}: {} triangles, {} lights, loaded in {:.2} s (BVH {:.3} s)",
+        args.scene.display(),
+        si.triangles,
+        si.lights,
+        si.load_time.as_secs_f64(),
+        si.bvh_build_time.as_secs_f64()
+    );
+    for w in &si.warnings {
+        eprintln!("warning: {w}");
+    }
+
+    let spp = if args.time.is_none() {
+        Some(args.spp.unwrap_or(16))
+    } else {
+        None
+    };
+    let session = Session::start(SessionConfig {
+        scene: scene.clone(),
+        integrator: info.name.to_string(),
+        params: params.clone(),
+        width: args.width,
+        height: args.height,
+        seed: args.seed,
+        threads: args.threads,
+        max_passes: spp,
+        time_limit: args.time.map(Duration::from_secs_f64),
+    })
+    .map_err(|e| Failure::Usage(e.to_string()))?;
+
+    let bar = match spp {
+        Some(n) => ProgressBar::new(n).with_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} passes  {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ),
+        None => ProgressBar::new_spinner().with_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {pos} passes  {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        ),
+    };
+    let mut frame = session.frame();
+    while !session.is_done() {
+        std::thread::sleep(Duration::from_millis(100));
+        frame = session.frame();
+        bar.set_position(frame.passes);
+        let secs = frame.elapsed.as_secs_f64().max(1e-9);
+        bar.set_message(format!("{:.2} Mrays/s", frame.rays as f64 / secs / 1e6));
+    }
+    let threads = session.threads();
+    frame = session.wait();
+    bar.finish_and_clear();
+
+    let secs = frame.elapsed.as_secs_f64().max(1e-9);
+    let metadata = BTreeMap::from([
+        ("integrator".to_string(), info.name.to_string()),
+        ("parameters".to_string(), params_json(&params)),
+        ("elapsed_seconds".to_string(), format!("{secs:.3}")),
+        ("passes".to_string(), frame.passes.to_string()),
+        ("samples_per_pixel".to_string(), frame.passes.to_string()),
+        ("seed".to_string(), args.seed.to_string()),
+        ("scene".to_string(), args.scene.display().to_string()),
+        ("threads".to_string(), threads.to_string()),
+        ("rays".to_string(), frame.rays.to_string()),
+        ("dropped_samples".to_string(), frame.dropped.to_string()),
+    ]);
+    match format {
+        Format::Exr => write_exr(&args.output, &frame.image, &metadata),
+        Format::Png => write_png(&args.output, &frame.image, args.exposure),
+    }
+    .with_context(|| "cannot write the image".to_string())?;
+    eprintln!(
+        "{} passes, {} samples in {:.2} s on {} threads: {:.2} Mrays/s, {} dropped samples -> {}",
+        frame.passes,
+        frame.samples,
+        secs,
+        threads,
+        frame.rays as f64 / secs / 1e6,
+        frame.dropped,
+        args.output.display()
+    );
+    Ok(())
+}

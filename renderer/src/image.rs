@@ -1,0 +1,273 @@
+//! Linear RGB images: EXR and PNG output (design.md section 3), EXR input for references, and
+//! the error metrics every part of the project shares.
+
+use crate::geometry::luminance;
+use crate::scene::texture::linear_to_srgb;
+use glam::Vec3;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Linear Rec. 709 RGB, row-major from the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<Vec3>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    #[error("{}: {message}", path.display())]
+    Io { path: PathBuf, message: String },
+    #[error("{0}")]
+    Invalid(String),
+}
+
+fn io_error(path: &Path, message: impl std::fmt::Display) -> ImageError {
+    ImageError::Io {
+        path: path.to_path_buf(),
+        message: message.to_string(),
+    }
+}
+
+/// Prefix of the EXR header attributes Caustica writes.
+pub const ATTRIBUTE_PREFIX: &str = "caustica:";
+
+impl Image {
+    pub fn new(width: usize, height: usize) -> Image {
+        Image {
+            width,
+            height,
+            pixels: vec![Vec3::ZERO; width * height],
+        }
+    }
+
+    pub fn pixel(&self, x: usize, y: usize) -> Vec3 {
+        self.pixels[y * self.width + x]
+    }
+
+    pub fn mean_luminance(&self) -> f64 {
+        if self.pixels.is_empty() {
+            return 0.0;
+        }
+        self.pixels
+            .iter()
+            .map(|p| luminance(*p) as f64)
+            .sum::<f64>()
+            / self.pixels.len() as f64
+    }
+
+    pub fn count_non_finite(&self) -> usize {
+        self.pixels.iter().filter(|p| !p.is_finite()).count()
+    }
+}
+
+/// Writes to a temporary file beside `path`, then renames it over `path`, so a reader never
+/// sees a half-written image and a failed write leaves any old file intact.
+fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), ImageError> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| io_error(path, "not a file name"))?
+        .to_string_lossy()
+        .into_owned();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io_error(path, e));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io_error(path, e)
+    })
+}
+
+/// EXR: float32 RGB, ZIP compression, `metadata` as text attributes named `caustica:KEY`.
+pub fn write_exr(
+    path: &Path,
+    image: &Image,
+    metadata: &BTreeMap<String, String>,
+) -> Result<(), ImageError> {
+    use exr::prelude::*;
+    if image.count_non_finite() > 0 {
+        return Err(ImageError::Invalid(format!(
+            "{} pixels are NaN or infinite",
+            image.count_non_finite()
+        )));
+    }
+    let (w, h) = (image.width, image.height);
+    let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+        let p = image.pixels[pos.y() * w + pos.x()];
+        (p.x, p.y, p.z)
+    });
+    let mut attributes = LayerAttributes::named("");
+    attributes.software_name = Some(Text::from("Caustica"));
+    for (k, v) in metadata {
+        let key = Text::new_or_none(format!("{ATTRIBUTE_PREFIX}{k}"));
+        let value = Text::new_or_none(v.as_str());
+        if let (Some(key), Some(value)) = (key, value) {
+            attributes.other.insert(key, AttributeValue::Text(value));
+        }
+    }
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let layer = Layer::new((w, h), attributes, encoding, channels);
+    write_atomically(path, |tmp| {
+        Image::from_layer(layer)
+            .write()
+            .to_file(tmp)
+            .map_err(|e| e.to_string())
+    })
+}
+
+/// Reads the first RGB(A) layer of an EXR and its `caustica:` attributes.
+pub fn read_exr(path: &Path) -> Result<(Image, BTreeMap<String, String>), ImageError> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| crate::image::Image::new(resolution.width(), resolution.height()),
+        |img: &mut crate::image::Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let w = img.width;
+            img.pixels[pos.y() * w + pos.x()] = Vec3::new(r, g, b);
+        },
+    )
+    .map_err(|e| io_error(path, e))?;
+    let mut metadata = BTreeMap::new();
+    for (k, v) in &image.layer_data.attributes.other {
+        if let (Some(key), AttributeValue::Text(text)) =
+            (k.to_string().strip_prefix(ATTRIBUTE_PREFIX), v)
+        {
+            metadata.insert(key.to_string(), text.to_string());
+        }
+    }
+    Ok((image.layer_data.channel_data.pixels, metadata))
+}
+
+/// PNG of what a viewer shows: exposure (in stops) then the sRGB curve, clamped.
+pub fn write_png(path: &Path, image: &Image, exposure: f32) -> Result<(), ImageError> {
+    let scale = 2f32.powf(exposure);
+    let mut bytes = Vec::with_capacity(image.pixels.len() * 3);
+    for p in &image.pixels {
+        for c in [p.x, p.y, p.z] {
+            let v = if c.is_finite() {
+                linear_to_srgb((c * scale).clamp(0.0, 1.0))
+            } else {
+                0.0
+            };
+            bytes.push((v * 255.0 + 0.5) as u8);
+        }
+    }
+    let buffer = ::image::RgbImage::from_raw(image.width as u32, image.height as u32, bytes)
+        .ok_or_else(|| ImageError::Invalid("image size does not match its pixels".into()))?;
+    write_atomically(path, |tmp| {
+        buffer
+            .save_with_format(tmp, ::image::ImageFormat::Png)
+            .map_err(|e| e.to_string())
+    })
+}
+
+/// Error of an image against a reference (design.md section 3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorMetrics {
+    /// Mean over pixels and channels of (x - r)^2 / (r^2 + 0.01).
+    pub rel_mse: f64,
+    pub rmse: f64,
+    /// Mean luminance of the image over that of the reference.
+    pub mean_luminance_ratio: f64,
+}
+
+pub fn compare(image: &Image, reference: &Image) -> Result<ErrorMetrics, ImageError> {
+    if (image.width, image.height) != (reference.width, reference.height) {
+        return Err(ImageError::Invalid(format!(
+            "image is {}x{} but the reference is {}x{}",
+            image.width, image.height, reference.width, reference.height
+        )));
+    }
+    for (what, img) in [("image", image), ("reference", reference)] {
+        let bad = img.count_non_finite();
+        if bad > 0 {
+            return Err(ImageError::Invalid(format!(
+                "{what} has {bad} NaN or infinite pixels"
+            )));
+        }
+    }
+    let (mut rel, mut sq) = (0.0f64, 0.0f64);
+    for (x, r) in image.pixels.iter().zip(&reference.pixels) {
+        for c in 0..3 {
+            let (x, r) = (x[c] as f64, r[c] as f64);
+            rel += (x - r) * (x - r) / (r * r + 0.01);
+            sq += (x - r) * (x - r);
+        }
+    }
+    let n = (image.pixels.len() * 3).max(1) as f64;
+    let ref_lum = reference.mean_luminance();
+    Ok(ErrorMetrics {
+        rel_mse: rel / n,
+        rmse: (sq / n).sqrt(),
+        mean_luminance_ratio: if ref_lum > 0.0 {
+            image.mean_luminance() / ref_lum
+        } else {
+            f64::NAN
+        },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_round_trip_keeps_pixels_and_metadata() {
+        let dir = std::env::temp_dir().join(format!("caustica-exr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("t.exr");
+        let mut img = Image::new(3, 2);
+        img.pixels[4] = Vec3::new(1.5, 0.25, 1e-3);
+        let meta = BTreeMap::from([("integrator".to_string(), "pt".to_string())]);
+        write_exr(&path, &img, &meta).unwrap();
+        let (back, m) = read_exr(&path).unwrap();
+        assert_eq!(back, img);
+        assert_eq!(m.get("integrator").map(String::as_str), Some("pt"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn metrics_follow_their_definitions() {
+        let r = Image {
+            width: 1,
+            height: 1,
+            pixels: vec![Vec3::splat(1.0)],
+        };
+        let x = Image {
+            width: 1,
+            height: 1,
+            pixels: vec![Vec3::splat(2.0)],
+        };
+        let m = compare(&x, &r).unwrap();
+        assert!((m.rel_mse - 1.0 / 1.01).abs() < 1e-12);
+        assert!((m.rmse - 1.0).abs() < 1e-12);
+        assert!((m.mean_luminance_ratio - 2.0).abs() < 1e-6);
+        let nan = Image {
+            width: 1,
+            height: 1,
+            pixels: vec![Vec3::NAN],
+        };
+        assert!(compare(&nan, &r).is_err());
+    }
+
+    #[test]
+    fn failed_write_names_the_file() {
+        let e = write_exr(
+            Path::new("/nonexistent-dir/x.exr"),
+            &Image::new(1, 1),
+            &BTreeMap::new(),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("/nonexistent-dir/x.exr"));
+    }
+}

@@ -1,0 +1,136 @@
+//! Integrators and their registry. Every integrator describes its parameters once (name,
+//! documentation, default, range, whether it can change while running); the command line,
+//! the viewer and the EXR header all read that one description (design.md section 7).
+
+pub mod path;
+
+use crate::camera::PerspectiveCamera;
+use crate::image::Image;
+use crate::scene::Scene;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+/// One parameter of an integrator.
+#[derive(Clone, Copy, Debug)]
+pub struct ParamSpec {
+    pub name: &'static str,
+    pub doc: &'static str,
+    pub default: f64,
+    pub min: f64,
+    pub max: f64,
+    pub integer: bool,
+    /// Changes apply to the passes still to come without a restart.
+    pub live: bool,
+}
+
+pub type ParamValues = BTreeMap<String, f64>;
+
+/// What an integrator needs to start: the scene, the camera at the output resolution, the seed.
+#[derive(Clone)]
+pub struct RenderContext {
+    pub scene: Arc<Scene>,
+    pub camera: PerspectiveCamera,
+    pub seed: u64,
+}
+
+/// Counters of one pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PassStats {
+    pub samples: u64,
+    pub rays: u64,
+    /// Estimates that were NaN, infinite or negative and were dropped at their source.
+    pub dropped: u64,
+}
+
+impl std::ops::Add for PassStats {
+    type Output = PassStats;
+    fn add(self, o: PassStats) -> PassStats {
+        PassStats {
+            samples: self.samples + o.samples,
+            rays: self.rays + o.rays,
+            dropped: self.dropped + o.dropped,
+        }
+    }
+}
+
+/// A pass stopped by cancellation; nothing of it reached the film.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cancelled;
+
+/// A progressive integrator: runs pass after pass (each on the caller's rayon pool) and can
+/// give its current estimate at any time.
+pub trait Integrator: Send {
+    fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled>;
+    /// The current normalised estimate.
+    fn image(&self) -> Image;
+    /// Applies a live parameter; false if the name is not live for this integrator.
+    fn set_live_param(&mut self, name: &str, value: f64) -> bool;
+}
+
+pub struct IntegratorInfo {
+    pub name: &'static str,
+    pub title: &'static str,
+    pub description: &'static str,
+    pub params: &'static [ParamSpec],
+    pub create: fn(RenderContext, &ParamValues) -> Box<dyn Integrator>,
+}
+
+static REGISTRY: &[IntegratorInfo] = &[IntegratorInfo {
+    name: "pt",
+    title: "Path tracer",
+    description: "Unidirectional path tracing with next-event estimation and MIS (reference).",
+    params: path::PathSettings::PARAMS,
+    create: path::create,
+}];
+
+pub fn registry() -> &'static [IntegratorInfo] {
+    REGISTRY
+}
+
+pub fn find(name: &str) -> Option<&'static IntegratorInfo> {
+    REGISTRY.iter().find(|i| i.name == name)
+}
+
+/// Parameter values for `info`: defaults overridden by `given`, each checked against its range.
+pub fn resolve_params(info: &IntegratorInfo, given: &ParamValues) -> Result<ParamValues, String> {
+    for name in given.keys() {
+        if !info.params.iter().any(|p| p.name == name) {
+            let known: Vec<_> = info.params.iter().map(|p| p.name).collect();
+            return Err(format!(
+                "integrator '{}' has no parameter '{name}' (it has: {})",
+                info.name,
+                known.join(", ")
+            ));
+        }
+    }
+    let mut values = ParamValues::new();
+    for p in info.params {
+        let v = given.get(p.name).copied().unwrap_or(p.default);
+        check_param(p, v)?;
+        values.insert(p.name.to_string(), v);
+    }
+    Ok(values)
+}
+
+pub fn check_param(p: &ParamSpec, v: f64) -> Result<(), String> {
+    if !v.is_finite() || v < p.min || v > p.max {
+        return Err(format!(
+            "{} = {v} is outside its range [{}, {}]",
+            p.name, p.min, p.max
+        ));
+    }
+    if p.integer && v.fract() != 0.0 {
+        return Err(format!("{} = {v} must be a whole number", p.name));
+    }
+    Ok(())
+}
+
+/// Parameters as a JSON object, for EXR headers and logs.
+pub fn params_json(values: &ParamValues) -> String {
+    let map: serde_json::Map<String, serde_json::Value> = values
+        .iter()
+        .map(|(k, v)| (k.clone(), serde_json::json!(v)))
+        .collect();
+    serde_json::Value::Object(map).to_string()
+}

@@ -1,0 +1,31 @@
+//! # caustica-renderer
+//!
+//! The CPU light-transport library behind Caustica. It knows nothing of any GUI.
+//!
+//! How the pieces fit (after pbrt-v4):
+//! - [`scene::Scene`] is immutable once built (from glTF by [`scene::gltf::load`], or from a
+//!   [`scene::SceneDescription`] in code) and shared by all threads through an `Arc`. It owns
+//!   the triangles, [`material::Material`]s, [`light::Light`]s, the camera description and the
+//!   BVH ([`scene::accel`]).
+//! - A [`camera::PerspectiveCamera`] turns film positions into rays.
+//! - Every random number comes from a [`sampling::sampler::Sampler`] keyed by (seed, pixel,
+//!   sample index, dimension), so images do not depend on thread scheduling.
+//! - An [`integrators::Integrator`] runs one progressive pass at a time, taking work from the
+//!   sampler and writing to its [`film::Film`]; the registry in [`integrators`] lists every
+//!   integrator with the description of its parameters.
+//! - A [`session::Session`] runs passes on background threads and publishes the newest
+//!   [`session::Frame`] without ever blocking the workers; the command line and the viewer
+//!   both drive this one API.
+//! - [`image`] holds linear images, EXR/PNG output and the error metrics of design.md section 3.
+
+pub mod camera;
+pub mod film;
+pub mod geometry;
+pub mod image;
+pub mod integrators;
+pub mod light;
+pub mod material;
+pub mod procedural;
+pub mod sampling;
+pub mod scene;
+pub mod session;

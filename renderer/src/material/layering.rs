@@ -1,0 +1,149 @@
+//! Directional albedo of the glTF specular layer, for energy-conserving layering.
+//!
+//! glTF's `fresnel_mix` (spec appendix B.3.5) weights the diffuse base by 1 - F(V.H); the
+//! white-furnace test measured that this reflects up to 14 % more energy than it receives at
+//! grazing angles. We keep the specular layer exactly as glTF defines it and couple the
+//! diffuse base with the albedo scaling of Kelemen & Szirmay-Kalos, "A Microfacet Based
+//! Coupled Specular-Matte BRDF Model with Importance Sampling" (Eurographics 2001, eq. 5):
+//!
+//! ```text
+//!     f_diffuse = base / pi * (1 - E(mu_o)) (1 - E(mu_i)) / (1 - E_avg)
+//! ```
+//!
+//! with E(mu) the specular layer's directional albedo and E_avg = 2 ∫ E(mu) mu dmu. It is
+//! reciprocal, and the total albedo is E(mu_o) + base (1 - E(mu_o)) <= 1.
+//!
+//! Schlick's Fresnel is linear in f0, so E = f0 A(mu, alpha) + (1 - f0) B(mu, alpha) with
+//! A = ∫ s cos and B = ∫ (1 - wo.h)^5 s cos over the unfresnelled lobe s = D G / (4 cos cos).
+//! Both are tabulated once by quadrature over visible normals (Heitz 2018: the estimator
+//! of ∫ s cos is G2 / G1) and looked up bilinearly.
+
+use crate::material::microfacet::TrowbridgeReitz;
+use glam::{Vec2, Vec3};
+use std::sync::OnceLock;
+
+const N_MU: usize = 32;
+const N_ALPHA: usize = 32;
+/// Midpoint strata per axis of the quadrature: the reflected direction's horizon makes the
+/// integrand non-smooth in sample space and the error falls only like 1/STRATA (measured:
+/// 1.3e-3 at 32, 2e-4 at 128, against 4M-sample Monte Carlo).
+const STRATA: usize = 128;
+
+struct Tables {
+    a: Vec<f32>,
+    b: Vec<f32>,
+    a_avg: Vec<f32>,
+    b_avg: Vec<f32>,
+}
+
+// The grids are uniform in sqrt(mu) and in roughness sqrt(alpha): nodes crowd towards grazing
+// angles and smooth surfaces, where E changes fastest.
+fn grid_mu(i: usize) -> f32 {
+    let x = i as f32 / (N_MU - 1) as f32;
+    (x * x).max(1e-4)
+}
+
+fn grid_alpha(j: usize) -> f32 {
+    let r = j as f32 / (N_ALPHA - 1) as f32;
+    r * r
+}
+
+fn integrate(mu: f32, alpha: f32) -> (f32, f32) {
+    let strata = STRATA;
+    let tr = TrowbridgeReitz::new(alpha);
+    let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    let (mut a, mut b) = (0.0f64, 0.0f64);
+    for i in 0..strata {
+        for k in 0..strata {
+            let u = Vec2::new(
+                (i as f32 + 0.5) / strata as f32,
+                (k as f32 + 0.5) / strata as f32,
+            );
+            let wm = tr.sample_wm(wo, u);
+            let wi = crate::geometry::reflect(wo, wm);
+            if wi.z <= 0.0 {
+                continue;
+            }
+            let weight = (tr.g(wo, wi) / tr.g1(wo)) as f64;
+            let m = (1.0 - wo.dot(wm)).clamp(0.0, 1.0) as f64;
+            a += weight;
+            b += weight * m.powi(5);
+        }
+    }
+    let n = (strata * strata) as f64;
+    ((a / n) as f32, (b / n) as f32)
+}
+
+fn tables() -> &'static Tables {
+    static TABLES: OnceLock<Tables> = OnceLock::new();
+    TABLES.get_or_init(|| {
+        use rayon::prelude::*;
+        let cells: Vec<(f32, f32)> = (0..N_MU * N_ALPHA)
+            .into_par_iter()
+            .map(|c| integrate(grid_mu(c % N_MU), grid_alpha(c / N_MU)))
+            .collect();
+        let a: Vec<f32> = cells.iter().map(|c| c.0).collect();
+        let b: Vec<f32> = cells.iter().map(|c| c.1).collect();
+        // E_avg = 2 ∫ E(mu) mu dmu = 4 ∫ E(x^2) x^3 dx (mu = x^2), trapezoid rule in x.
+        let avg = |t: &[f32], j: usize| {
+            let h = 1.0 / (N_MU - 1) as f32;
+            (0..N_MU)
+                .map(|i| {
+                    let w = if i == 0 || i == N_MU - 1 { 0.5 } else { 1.0 };
+                    let x = i as f32 * h;
+                    w * t[j * N_MU + i] * x * x * x
+                })
+                .sum::<f32>()
+                * 4.0
+                * h
+        };
+        let a_avg = (0..N_ALPHA).map(|j| avg(&a, j)).collect();
+        let b_avg = (0..N_ALPHA).map(|j| avg(&b, j)).collect();
+        Tables { a, b, a_avg, b_avg }
+    })
+}
+
+fn lerp_index(x: f32, n: usize) -> (usize, usize, f32) {
+    let f = (x.clamp(0.0, 1.0)) * (n - 1) as f32;
+    let i0 = (f.floor() as usize).min(n - 2);
+    (i0, i0 + 1, f - i0 as f32)
+}
+
+/// Directional albedo E(mu) of the specular layer with Schlick reflectance f0.
+pub fn specular_albedo(mu: f32, alpha: f32, f0: f32) -> f32 {
+    let t = tables();
+    let (i0, i1, fi) = lerp_index(mu.abs().sqrt(), N_MU);
+    let (j0, j1, fj) = lerp_index(alpha.sqrt(), N_ALPHA);
+    let look = |g: &[f32]| {
+        let r0 = g[j0 * N_MU + i0] * (1.0 - fi) + g[j0 * N_MU + i1] * fi;
+        let r1 = g[j1 * N_MU + i0] * (1.0 - fi) + g[j1 * N_MU + i1] * fi;
+        r0 * (1.0 - fj) + r1 * fj
+    };
+    (f0 * look(&t.a) + (1.0 - f0) * look(&t.b)).clamp(0.0, 1.0)
+}
+
+/// Cosine-weighted hemispherical average E_avg of the specular layer's albedo.
+pub fn specular_albedo_average(alpha: f32, f0: f32) -> f32 {
+    let t = tables();
+    let (j0, j1, fj) = lerp_index(alpha.sqrt(), N_ALPHA);
+    let a = t.a_avg[j0] * (1.0 - fj) + t.a_avg[j1] * fj;
+    let b = t.b_avg[j0] * (1.0 - fj) + t.b_avg[j1] * fj;
+    (f0 * a + (1.0 - f0) * b).clamp(0.0, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn albedo_limits() {
+        // A perfect reflector (f0 = 1) with little roughness reflects nearly everything.
+        assert!((specular_albedo(0.8, 0.01, 1.0) - 1.0).abs() < 0.01);
+        // f0 = 0.04 at normal incidence reflects about 4 %; more at grazing angles.
+        let e = specular_albedo(1.0, 0.1, 0.04);
+        assert!((e - 0.04).abs() < 0.01, "{e}");
+        assert!(specular_albedo(0.1, 0.1, 0.04) > e);
+        let avg = specular_albedo_average(0.3, 0.04);
+        assert!(avg > 0.04 && avg < 0.2, "{avg}");
+    }
+}

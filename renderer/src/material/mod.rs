@@ -1,0 +1,240 @@
+//! Materials and BSDFs. A `Material` is the scene's description (glTF factors and textures);
+//! at a surface hit it becomes a `Bsdf`, a closed enum of the four kinds design.md section 2
+//! names, each modelling only what it needs. All BSDFs work in the local shading frame (+z is
+//! the shading normal) and serve both faces of a surface.
+
+pub mod conductor;
+pub mod dielectric;
+pub mod diffuse;
+pub mod layering;
+pub mod metallic_roughness;
+pub mod microfacet;
+
+#[cfg(test)]
+mod tests;
+
+use crate::scene::texture::Texture;
+use conductor::MirrorBxdf;
+use dielectric::SmoothDielectric;
+use diffuse::DiffuseBxdf;
+use glam::{Vec2, Vec3};
+use metallic_roughness::MetallicRoughness;
+use microfacet::TrowbridgeReitz;
+
+/// Whether a path carries radiance (from the camera) or importance (from a light); it matters
+/// for refraction's 1/eta^2 scaling (Veach's thesis, section 5.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransportMode {
+    Radiance,
+    Importance,
+}
+
+/// A sampled direction: `f` the BSDF value, `pdf` its solid-angle density (the discrete
+/// probability for a delta lobe), `eta` the relative index crossed (1 for reflection).
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    pub f: Vec3,
+    pub wi: Vec3,
+    pub pdf: f32,
+    pub is_delta: bool,
+    pub eta: f32,
+}
+
+impl BsdfSample {
+    pub fn reflection(f: Vec3, wi: Vec3, pdf: f32, is_delta: bool) -> Self {
+        BsdfSample {
+            f,
+            wi,
+            pdf,
+            is_delta,
+            eta: 1.0,
+        }
+    }
+
+    pub fn transmission(f: Vec3, wi: Vec3, pdf: f32, is_delta: bool, eta: f32) -> Self {
+        BsdfSample {
+            f,
+            wi,
+            pdf,
+            is_delta,
+            eta,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub enum Bsdf {
+    Diffuse(DiffuseBxdf),
+    Mirror(MirrorBxdf),
+    Dielectric(SmoothDielectric),
+    MetallicRoughness(MetallicRoughness),
+}
+
+impl Bsdf {
+    /// True when every lobe is a delta distribution (no point in next-event estimation).
+    pub fn is_delta(&self) -> bool {
+        matches!(self, Bsdf::Mirror(_) | Bsdf::Dielectric(_))
+    }
+
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        match self {
+            Bsdf::Diffuse(b) => b.f(wo, wi),
+            Bsdf::MetallicRoughness(b) => b.f(wo, wi, mode),
+            Bsdf::Mirror(_) | Bsdf::Dielectric(_) => Vec3::ZERO,
+        }
+    }
+
+    /// Samples wi given wo; `uc` picks a lobe, `u` the direction within it.
+    pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let s = match self {
+            Bsdf::Diffuse(b) => b.sample_f(wo, u),
+            Bsdf::Mirror(b) => b.sample_f(wo),
+            Bsdf::Dielectric(b) => b.sample_f(wo, uc, mode),
+            Bsdf::MetallicRoughness(b) => b.sample_f(wo, uc, u, mode),
+        }?;
+        (s.pdf > 0.0 && s.f.is_finite() && s.wi.is_finite()).then_some(s)
+    }
+
+    /// Solid-angle pdf of `sample_f` choosing wi (zero for delta BSDFs).
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Bsdf::Diffuse(b) => b.pdf(wo, wi),
+            Bsdf::MetallicRoughness(b) => b.pdf(wo, wi),
+            Bsdf::Mirror(_) | Bsdf::Dielectric(_) => 0.0,
+        }
+    }
+}
+
+/// A texture reference: index into the scene's textures (TEXCOORD_0 only).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    pub texture: u32,
+}
+
+/// Which BSDF a material needs, decided once from its factors (design.md section 2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MaterialKind {
+    Diffuse,
+    Mirror,
+    Dielectric,
+    MetallicRoughness,
+}
+
+/// A glTF material, with the defaults of the glTF spec.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    pub base_color: Vec3,
+    pub base_color_texture: Option<TextureRef>,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Roughness in G, metalness in B (glTF spec 3.9.2).
+    pub metallic_roughness_texture: Option<TextureRef>,
+    pub transmission: f32,
+    pub ior: f32,
+    /// emissiveFactor x KHR_materials_emissive_strength.
+    pub emission: Vec3,
+    pub emissive_texture: Option<TextureRef>,
+    pub normal_texture: Option<(TextureRef, f32)>,
+    pub double_sided: bool,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: String::new(),
+            base_color: Vec3::ONE,
+            base_color_texture: None,
+            metallic: 1.0,
+            roughness: 1.0,
+            metallic_roughness_texture: None,
+            transmission: 0.0,
+            ior: 1.5,
+            emission: Vec3::ZERO,
+            emissive_texture: None,
+            normal_texture: None,
+            double_sided: false,
+        }
+    }
+}
+
+impl Material {
+    pub fn diffuse(base_color: Vec3) -> Material {
+        Material {
+            base_color,
+            metallic: 0.0,
+            roughness: 1.0,
+            ..Default::default()
+        }
+    }
+
+    pub fn kind(&self) -> MaterialKind {
+        let factors_only = self.metallic_roughness_texture.is_none();
+        if factors_only && self.transmission > 0.0 && self.roughness == 0.0 && self.metallic == 0.0
+        {
+            MaterialKind::Dielectric
+        } else if factors_only && self.metallic == 1.0 && self.roughness == 0.0 {
+            MaterialKind::Mirror
+        } else if factors_only
+            && self.metallic == 0.0
+            && self.roughness == 1.0
+            && self.transmission == 0.0
+        {
+            MaterialKind::Diffuse
+        } else {
+            MaterialKind::MetallicRoughness
+        }
+    }
+
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+
+    fn texture_rgba(textures: &[Texture], t: Option<TextureRef>, uv: Vec2) -> glam::Vec4 {
+        t.and_then(|t| textures.get(t.texture as usize))
+            .map_or(glam::Vec4::ONE, |tex| tex.lookup(uv))
+    }
+
+    /// Emitted radiance at texture coordinate `uv` (before the one-sidedness test).
+    pub fn emitted(&self, textures: &[Texture], uv: Vec2) -> Vec3 {
+        self.emission * Self::texture_rgba(textures, self.emissive_texture, uv).truncate()
+    }
+
+    /// The BSDF at a point with texture coordinate `uv`.
+    pub fn bsdf(&self, textures: &[Texture], uv: Vec2) -> Bsdf {
+        let base = (self.base_color
+            * Self::texture_rgba(textures, self.base_color_texture, uv).truncate())
+        .clamp(Vec3::ZERO, Vec3::ONE);
+        match self.kind() {
+            MaterialKind::Diffuse => Bsdf::Diffuse(DiffuseBxdf { r: base }),
+            MaterialKind::Mirror => Bsdf::Mirror(MirrorBxdf { r: base }),
+            MaterialKind::Dielectric => Bsdf::Dielectric(SmoothDielectric {
+                eta: self.ior,
+                tint: base,
+            }),
+            MaterialKind::MetallicRoughness => {
+                let mr = Self::texture_rgba(textures, self.metallic_roughness_texture, uv);
+                let roughness = (self.roughness * mr.y).clamp(0.0, 1.0);
+                let metallic = (self.metallic * mr.z).clamp(0.0, 1.0);
+                Bsdf::MetallicRoughness(MetallicRoughness {
+                    base_color: base,
+                    metallic,
+                    transmission: self.transmission.clamp(0.0, 1.0),
+                    eta: self.ior,
+                    distrib: TrowbridgeReitz::new(roughness * roughness),
+                })
+            }
+        }
+    }
+}
+
+/// A rough dielectric interface (glTF: transmission 1, metallic 0, roughness sqrt(alpha)).
+pub fn rough_dielectric(eta: f32, alpha: f32) -> Bsdf {
+    Bsdf::MetallicRoughness(MetallicRoughness {
+        base_color: Vec3::ONE,
+        metallic: 0.0,
+        transmission: 1.0,
+        eta,
+        distrib: TrowbridgeReitz::new(alpha),
+    })
+}

@@ -1,0 +1,356 @@
+//! Scenes the project generates itself: meshes (spheres, boxes, quads), the closed-form test
+//! scenes, and the bundled Cornell boxes written to `assets/` by `examples/make_assets.rs`.
+
+use crate::camera::CameraDesc;
+use crate::material::Material;
+use crate::scene::{MeshDesc, PunctualLightDesc, SceneDescription};
+use glam::{Affine3A, Quat, Vec2, Vec3};
+use std::f32::consts::PI;
+
+/// UV sphere with `segments` around and `rings` from pole to pole. With `inward`, triangles
+/// face the centre (counter-clockwise seen from inside) and normals point inward.
+pub fn uv_sphere(
+    name: &str,
+    center: Vec3,
+    radius: f32,
+    segments: u32,
+    rings: u32,
+    inward: bool,
+    material: u32,
+) -> MeshDesc {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut uvs = Vec::new();
+    for r in 0..=rings {
+        let theta = PI * r as f32 / rings as f32;
+        for s in 0..=segments {
+            let phi = 2.0 * PI * s as f32 / segments as f32;
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            );
+            positions.push(center + radius * n);
+            normals.push(if inward { -n } else { n });
+            uvs.push(Vec2::new(
+                s as f32 / segments as f32,
+                r as f32 / rings as f32,
+            ));
+        }
+    }
+    let mut indices = Vec::new();
+    let row = segments + 1;
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b, c, d) = (
+                r * row + s,
+                (r + 1) * row + s,
+                (r + 1) * row + s + 1,
+                r * row + s + 1,
+            );
+            // Counter-clockwise seen from outside; the poles' zero-area triangles are skipped.
+            let mut tris = Vec::new();
+            if r != 0 {
+                tris.push([a, b, d]);
+            }
+            if r != rings - 1 {
+                tris.push([d, b, c]);
+            }
+            for mut t in tris {
+                if inward {
+                    t.swap(1, 2);
+                }
+                indices.extend_from_slice(&t);
+            }
+        }
+    }
+    MeshDesc {
+        name: name.into(),
+        positions,
+        normals: Some(normals),
+        uvs: Some(uvs),
+        indices,
+        material,
+    }
+}
+
+/// Quad p0 p1 p2 p3, counter-clockwise seen from its front.
+pub fn quad(name: &str, p: [Vec3; 4], material: u32) -> MeshDesc {
+    MeshDesc {
+        name: name.into(),
+        positions: p.to_vec(),
+        normals: None,
+        uvs: Some(vec![
+            Vec2::new(0.0, 1.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(0.0, 0.0),
+        ]),
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material,
+    }
+}
+
+/// The unit cube [-0.5, 0.5]^3 transformed by `xf`, faces outward.
+pub fn cuboid(name: &str, xf: Affine3A, material: u32) -> MeshDesc {
+    let c = |x: f32, y: f32, z: f32| xf.transform_point3(Vec3::new(x, y, z) * 0.5);
+    let faces = [
+        [
+            c(-1., -1., 1.),
+            c(1., -1., 1.),
+            c(1., 1., 1.),
+            c(-1., 1., 1.),
+        ], // +z
+        [
+            c(1., -1., -1.),
+            c(-1., -1., -1.),
+            c(-1., 1., -1.),
+            c(1., 1., -1.),
+        ], // -z
+        [
+            c(1., -1., 1.),
+            c(1., -1., -1.),
+            c(1., 1., -1.),
+            c(1., 1., 1.),
+        ], // +x
+        [
+            c(-1., -1., -1.),
+            c(-1., -1., 1.),
+            c(-1., 1., 1.),
+            c(-1., 1., -1.),
+        ], // -x
+        [
+            c(-1., 1., 1.),
+            c(1., 1., 1.),
+            c(1., 1., -1.),
+            c(-1., 1., -1.),
+        ], // +y
+        [
+            c(-1., -1., -1.),
+            c(1., -1., -1.),
+            c(1., -1., 1.),
+            c(-1., -1., 1.),
+        ], // -y
+    ];
+    let mut mesh = MeshDesc {
+        name: name.into(),
+        material,
+        ..Default::default()
+    };
+    for f in faces {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend_from_slice(&f);
+        mesh.indices
+            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    mesh
+}
+
+fn camera_looking(from: Vec3, to: Vec3, yfov_degrees: f32) -> CameraDesc {
+    let rotation = Quat::from_rotation_arc(Vec3::NEG_Z, (to - from).normalize());
+    CameraDesc {
+        camera_to_world: Affine3A::from_rotation_translation(rotation, from),
+        yfov: yfov_degrees.to_radians(),
+        aspect: None,
+    }
+}
+
+/// Closed form: inside a sphere of radius 1 and diffuse albedo 0.5, a point light of intensity
+/// pi at the centre. Direct irradiance is pi everywhere, and the enclosure's interreflection
+/// gives L = rho E / (pi (1 - rho)) = 1 in every direction.
+pub fn sphere_with_point_light(segments: u32) -> SceneDescription {
+    SceneDescription {
+        name: "sphere-point-light".into(),
+        meshes: vec![uv_sphere(
+            "sphere",
+            Vec3::ZERO,
+            1.0,
+            segments,
+            segments / 2,
+            true,
+            0,
+        )],
+        materials: vec![Material::diffuse(Vec3::splat(0.5))],
+        lights: vec![PunctualLightDesc::Point {
+            position: Vec3::ZERO,
+            intensity: Vec3::splat(PI),
+        }],
+        camera: Some(camera_looking(Vec3::ZERO, Vec3::NEG_Z, 60.0)),
+        ..Default::default()
+    }
+}
+
+/// Closed form: inside a closed sphere that emits `le` and reflects diffusely with albedo
+/// `rho`, radiance is le / (1 - rho) everywhere (the Neumann series of a uniform enclosure).
+pub fn emissive_sphere(le: f32, rho: f32, segments: u32) -> SceneDescription {
+    let mut m = Material::diffuse(Vec3::splat(rho));
+    m.emission = Vec3::splat(le);
+    SceneDescription {
+        name: "emissive-sphere".into(),
+        meshes: vec![uv_sphere(
+            "sphere",
+            Vec3::ZERO,
+            1.0,
+            segments,
+            segments / 2,
+            true,
+            0,
+        )],
+        materials: vec![m],
+        camera: Some(camera_looking(
+            Vec3::new(0.1, 0.2, 0.3),
+            Vec3::new(0.5, 0.0, -1.0),
+            60.0,
+        )),
+        ..Default::default()
+    }
+}
+
+/// The Cornell box: white, red and green diffuse walls in [-1, 1] x [0, 2] x [-1, 1], a square
+/// area light under the ceiling, and two blocks; with `glass`, a smooth glass sphere (ior 1.5)
+/// stands in place of the short block and throws a caustic on the floor.
+pub fn cornell_box(glass: bool) -> SceneDescription {
+    let white = Material {
+        name: "white".into(),
+        ..Material::diffuse(Vec3::new(0.725, 0.71, 0.68))
+    };
+    let red = Material {
+        name: "red".into(),
+        ..Material::diffuse(Vec3::new(0.63, 0.065, 0.05))
+    };
+    let green = Material {
+        name: "green".into(),
+        ..Material::diffuse(Vec3::new(0.14, 0.45, 0.091))
+    };
+    let light = Material {
+        name: "light".into(),
+        emission: Vec3::new(17.0, 12.0, 4.0),
+        ..Material::diffuse(Vec3::splat(0.78))
+    };
+    let glass_material = Material {
+        name: "glass".into(),
+        base_color: Vec3::ONE,
+        metallic: 0.0,
+        roughness: 0.0,
+        transmission: 1.0,
+        ior: 1.5,
+        ..Default::default()
+    };
+    let v = Vec3::new;
+    let mut meshes = vec![
+        quad(
+            "floor",
+            [
+                v(-1., 0., 1.),
+                v(1., 0., 1.),
+                v(1., 0., -1.),
+                v(-1., 0., -1.),
+            ],
+            0,
+        ),
+        quad(
+            "ceiling",
+            [
+                v(-1., 2., -1.),
+                v(1., 2., -1.),
+                v(1., 2., 1.),
+                v(-1., 2., 1.),
+            ],
+            0,
+        ),
+        quad(
+            "back",
+            [
+                v(-1., 0., -1.),
+                v(1., 0., -1.),
+                v(1., 2., -1.),
+                v(-1., 2., -1.),
+            ],
+            0,
+        ),
+        quad(
+            "left",
+            [
+                v(-1., 0., 1.),
+                v(-1., 0., -1.),
+                v(-1., 2., -1.),
+                v(-1., 2., 1.),
+            ],
+            1,
+        ),
+        quad(
+            "right",
+            [v(1., 0., -1.), v(1., 0., 1.), v(1., 2., 1.), v(1., 2., -1.)],
+            2,
+        ),
+        quad(
+            "light",
+            [
+                v(-0.25, 1.98, -0.25),
+                v(0.25, 1.98, -0.25),
+                v(0.25, 1.98, 0.25),
+                v(-0.25, 1.98, 0.25),
+            ],
+            3,
+        ),
+        cuboid(
+            "tall block",
+            Affine3A::from_scale_rotation_translation(
+                v(0.6, 1.2, 0.6),
+                Quat::from_rotation_y(0.3),
+                v(-0.35, 0.6, -0.3),
+            ),
+            0,
+        ),
+    ];
+    if glass {
+        meshes.push(uv_sphere(
+            "glass sphere",
+            v(0.4, 0.4, 0.35),
+            0.4,
+            64,
+            32,
+            false,
+            4,
+        ));
+    } else {
+        meshes.push(cuboid(
+            "short block",
+            Affine3A::from_scale_rotation_translation(
+                v(0.6, 0.6, 0.6),
+                Quat::from_rotation_y(-0.3),
+                v(0.35, 0.3, 0.35),
+            ),
+            0,
+        ));
+    }
+    let mut materials = vec![white, red, green, light];
+    if glass {
+        materials.push(glass_material);
+    }
+    SceneDescription {
+        name: if glass {
+            "cornell-glass"
+        } else {
+            "cornell-box"
+        }
+        .into(),
+        meshes,
+        materials,
+        camera: Some(camera_looking(v(0.0, 1.0, 3.9), v(0.0, 1.0, 0.0), 39.3)),
+        ..Default::default()
+    }
+}
+
+/// Every mesh of a description scaled by `s` about the origin, camera included.
+pub fn scaled(mut desc: SceneDescription, s: f32) -> SceneDescription {
+    for m in &mut desc.meshes {
+        for p in &mut m.positions {
+            *p *= s;
+        }
+    }
+    if let Some(c) = &mut desc.camera {
+        c.camera_to_world.translation *= s;
+    }
+    desc
+}

@@ -1,0 +1,139 @@
+//! Acceleration structure: obvhs's 8-wide compressed BVH (CWBVH) with our own watertight
+//! triangle test (`scene::triangle`).
+//!
+//! Two measured facts shape this wrapper (see shared/stack-notes.md): obvhs's own triangle test
+//! is not watertight, and its CWBVH node test clamps each child's entry distance to at least
+//! 1e-4 in absolute units, so geometry nearer than that to a ray's origin would be culled.
+//! The BVH is therefore built over the triangles scaled by a power of two that brings the
+//! scene's extent to about 2^10: scaling by a power of two is exact in floating point, so
+//! barycentrics are unchanged and distances scale exactly, and the clamp becomes ~1e-7 of the
+//! scene's size whatever its units.
+
+use crate::geometry::Ray;
+use crate::scene::triangle::{RayShear, TriangleHit, intersect_triangle};
+use glam::{Vec3, Vec3A};
+use obvhs::{
+    BvhBuildParams, cwbvh::CwBvh, cwbvh::builder::build_cwbvh_from_tris, ray::RayHit,
+    triangle::Triangle,
+};
+use std::time::Duration;
+
+/// Extent the scene is scaled to inside the BVH.
+const CANONICAL_EXTENT: f32 = 1024.0;
+
+pub struct Accel {
+    bvh: Option<CwBvh>,
+    /// Scaled triangles in the BVH's primitive order, so leaves read memory in sequence.
+    tris: Vec<[Vec3; 3]>,
+    /// Scene triangle index of each BVH primitive (spatial splits may repeat a triangle).
+    prim_to_triangle: Vec<u32>,
+    scale: f32,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct AccelHit {
+    pub t: f32,
+    pub triangle: u32,
+    /// Barycentrics of the triangle's vertices 0, 1, 2.
+    pub b: Vec3,
+}
+
+fn power_of_two_scale(extent: f32) -> f32 {
+    if !(extent.is_finite() && extent > 0.0) {
+        return 1.0;
+    }
+    let e = (CANONICAL_EXTENT / extent)
+        .log2()
+        .round()
+        .clamp(-100.0, 100.0) as i32;
+    2f32.powi(e)
+}
+
+impl Accel {
+    /// Builds the BVH over world-space triangles; `extent` is the largest absolute coordinate.
+    pub fn build(triangles: &[[Vec3; 3]], extent: f32) -> Accel {
+        let scale = power_of_two_scale(extent);
+        if triangles.is_empty() {
+            return Accel {
+                bvh: None,
+                tris: Vec::new(),
+                prim_to_triangle: Vec::new(),
+                scale,
+            };
+        }
+        let scaled: Vec<Triangle> = triangles
+            .iter()
+            .map(|t| Triangle {
+                v0: Vec3A::from(t[0] * scale),
+                v1: Vec3A::from(t[1] * scale),
+                v2: Vec3A::from(t[2] * scale),
+            })
+            .collect();
+        let mut build_time = Duration::ZERO;
+        let bvh = build_cwbvh_from_tris(&scaled, BvhBuildParams::medium_build(), &mut build_time);
+        let prim_to_triangle = bvh.primitive_indices.clone();
+        let tris = prim_to_triangle
+            .iter()
+            .map(|&i| {
+                let t = &scaled[i as usize];
+                [Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2)]
+            })
+            .collect();
+        Accel {
+            bvh: Some(bvh),
+            tris,
+            prim_to_triangle,
+            scale,
+        }
+    }
+
+    fn to_bvh_ray(&self, ray: &Ray) -> Option<obvhs::ray::Ray> {
+        if !(ray.o.is_finite() && ray.d.is_finite()) || ray.d == Vec3::ZERO {
+            return None;
+        }
+        Some(obvhs::ray::Ray::new(
+            Vec3A::from(ray.o * self.scale),
+            Vec3A::from(ray.d),
+            0.0,
+            ray.t_max * self.scale,
+        ))
+    }
+
+    /// Closest hit in `(0, ray.t_max)`.
+    pub fn intersect(&self, ray: &Ray) -> Option<AccelHit> {
+        let bvh = self.bvh.as_ref()?;
+        let bvh_ray = self.to_bvh_ray(ray)?;
+        let shear = RayShear::new(Vec3::from(bvh_ray.origin), ray.d);
+        let mut best: Option<(u32, TriangleHit)> = None;
+        let mut hit = RayHit::none();
+        bvh.ray_traverse(bvh_ray, &mut hit, |r, id| {
+            let [p0, p1, p2] = self.tris[id];
+            match intersect_triangle(&shear, r.tmax, p0, p1, p2) {
+                Some(h) => {
+                    best = Some((id as u32, h));
+                    h.t
+                }
+                None => f32::INFINITY,
+            }
+        });
+        let (id, h) = best?;
+        // `best` holds the last accepted candidate, which traversal guarantees is the nearest.
+        Some(AccelHit {
+            t: h.t / self.scale,
+            triangle: self.prim_to_triangle[id as usize],
+            b: h.b,
+        })
+    }
+
+    /// True if anything blocks the ray before `ray.t_max`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        let (Some(bvh), Some(bvh_ray)) = (self.bvh.as_ref(), self.to_bvh_ray(ray)) else {
+            return false;
+        };
+        let shear = RayShear::new(Vec3::from(bvh_ray.origin), ray.d);
+        !bvh.ray_traverse_miss(bvh_ray, |r, id| {
+            let [p0, p1, p2] = self.tris[id];
+            intersect_triangle(&shear, r.tmax, p0, p1, p2).map_or(f32::INFINITY, |h| h.t)
+        })
+    }
+}

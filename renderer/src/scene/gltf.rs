@@ -1,0 +1,449 @@
+//! glTF 2.0 loader (`.gltf` with external or embedded buffers, and `.glb`), interpreting the
+//! file exactly as design.md section 2 says. Bad input is an error naming the file and the
+//! problem, never a panic: buffer views and accessors are bounds-checked before anything
+//! reads them, the node graph is walked with a depth limit, and as a last line of defence a
+//! panic inside the gltf crate is caught and reported as an error.
+
+use crate::camera::CameraDesc;
+use crate::material::{Material, TextureRef};
+use crate::scene::texture::{Texture, Wrap};
+use crate::scene::{MeshDesc, PunctualLightDesc, Scene, SceneDescription, SceneError};
+use glam::{Affine3A, Mat3, Mat4, Quat, Vec2, Vec3};
+use std::collections::HashMap;
+use std::path::Path;
+use std::time::Instant;
+
+/// Extensions we implement; a file that requires any other is refused.
+pub const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_emissive_strength",
+];
+
+const MAX_NODE_DEPTH: usize = 256;
+
+/// Loads and builds a scene from a glTF file.
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let start = Instant::now();
+    let desc = load_description(path)?;
+    let mut scene = Scene::build(desc).map_err(|e| e.in_file(path))?;
+    scene.info.load_time = start.elapsed();
+    Ok(scene)
+}
+
+/// Reads a glTF file into a scene description (no BVH yet).
+pub fn load_description(path: &Path) -> Result<SceneDescription, SceneError> {
+    let result = std::panic::catch_unwind(|| read(path));
+    match result {
+        Ok(r) => r.map_err(|e| e.in_file(path)),
+        Err(_) => Err(SceneError::new("the glTF reader failed on malformed data").in_file(path)),
+    }
+}
+
+fn err(problem: impl Into<String>) -> SceneError {
+    SceneError::new(problem)
+}
+
+fn read(path: &Path) -> Result<SceneDescription, SceneError> {
+    let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read file: {e}")))?;
+    let gltf = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| err(format!("not a valid glTF file: {e}")))?;
+    for ext in gltf.document.extensions_required() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext) {
+            return Err(err(format!("requires the unsupported extension {ext}")));
+        }
+    }
+    // Validate after the extension check, so an unknown required extension is named as such.
+    let gltf::Gltf { document, blob } = gltf;
+    let document = gltf::Document::from_json(document.into_json())
+        .map_err(|e| err(format!("invalid glTF: {e}")))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = gltf::import_buffers(&document, Some(base), blob)
+        .map_err(|e| err(format!("cannot load buffers: {e}")))?;
+    check_views_and_accessors(&document, &buffers)?;
+
+    let mut loader = Loader {
+        buffers: &buffers,
+        base,
+        desc: SceneDescription {
+            name: path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            ..Default::default()
+        },
+        material_index: HashMap::new(),
+        texture_index: HashMap::new(),
+        images: HashMap::new(),
+        document: &document,
+    };
+    let scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next());
+    match scene {
+        Some(s) => {
+            for node in s.nodes() {
+                loader.visit(&node, Mat4::IDENTITY, 0)?;
+            }
+        }
+        None => return Err(err("the file has no scene")),
+    }
+    if loader.desc.meshes.is_empty() {
+        return Err(err("the scene has no triangle meshes"));
+    }
+    Ok(loader.desc)
+}
+
+/// Bounds of every buffer view and accessor, so no read can go past its buffer.
+fn check_views_and_accessors(
+    document: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), SceneError> {
+    for view in document.views() {
+        let len = buffers.get(view.buffer().index()).map_or(0, |b| b.len());
+        let end = view.offset().checked_add(view.length());
+        if end.is_none_or(|e| e > len) {
+            return Err(err(format!(
+                "buffer view {} (offset {}, length {}) runs past its buffer of {len} bytes",
+                view.index(),
+                view.offset(),
+                view.length()
+            )));
+        }
+    }
+    for acc in document.accessors() {
+        if acc.sparse().is_some() {
+            return Err(err(format!(
+                "accessor {}: sparse accessors are not supported",
+                acc.index()
+            )));
+        }
+        let Some(view) = acc.view() else { continue };
+        let elem = acc.size();
+        let stride = view.stride().unwrap_or(elem);
+        let count = acc.count();
+        let needed = if count == 0 {
+            Some(0)
+        } else {
+            stride
+                .checked_mul(count - 1)
+                .and_then(|s| s.checked_add(elem))
+                .and_then(|s| s.checked_add(acc.offset()))
+        };
+        if needed.is_none_or(|n| n > view.length()) || stride < elem {
+            return Err(err(format!(
+                "accessor {}: {count} elements of {elem} bytes do not fit buffer view {} ({} bytes)",
+                acc.index(),
+                view.index(),
+                view.length()
+            )));
+        }
+    }
+    Ok(())
+}
+
+struct Loader<'a> {
+    document: &'a gltf::Document,
+    buffers: &'a [gltf::buffer::Data],
+    base: &'a Path,
+    desc: SceneDescription,
+    material_index: HashMap<Option<usize>, u32>,
+    texture_index: HashMap<(usize, bool), u32>,
+    images: HashMap<usize, Option<(usize, usize, Vec<u8>)>>,
+}
+
+fn rigid(m: Mat4) -> Affine3A {
+    let (_, rotation, translation) = m.to_scale_rotation_translation();
+    let rotation = if rotation.is_finite() {
+        rotation.normalize()
+    } else {
+        Quat::IDENTITY
+    };
+    Affine3A::from_rotation_translation(rotation, translation)
+}
+
+impl Loader<'_> {
+    fn visit(&mut self, node: &gltf::Node, parent: Mat4, depth: usize) -> Result<(), SceneError> {
+        if depth > MAX_NODE_DEPTH {
+            return Err(err(format!(
+                "the node hierarchy is deeper than {MAX_NODE_DEPTH} (a cycle?)"
+            )));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(err(format!(
+                "node {}: transform is NaN or infinite",
+                node.index()
+            )));
+        }
+        if let Some(mesh) = node.mesh() {
+            self.add_mesh(&mesh, world)?;
+        }
+        if let Some(camera) = node.camera()
+            && self.desc.camera.is_none()
+        {
+            match camera.projection() {
+                gltf::camera::Projection::Perspective(p) => {
+                    self.desc.camera = Some(CameraDesc {
+                        camera_to_world: rigid(world),
+                        yfov: p.yfov(),
+                        aspect: p.aspect_ratio(),
+                    })
+                }
+                gltf::camera::Projection::Orthographic(_) => self.desc.warnings.push(format!(
+                    "camera {}: orthographic cameras are not supported",
+                    camera.index()
+                )),
+            }
+        }
+        if let Some(light) = node.light() {
+            self.add_light(&light, world);
+        }
+        for child in node.children() {
+            self.visit(&child, world, depth + 1)?;
+        }
+        Ok(())
+    }
+
+    fn add_light(&mut self, light: &gltf::khr_lights_punctual::Light, world: Mat4) {
+        let color = Vec3::from(light.color()) * light.intensity();
+        let xf = rigid(world);
+        let position = Vec3::from(xf.translation);
+        let direction = xf.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Z);
+        if !color.is_finite() || color.min_element() < 0.0 {
+            self.desc.warnings.push(format!(
+                "light {}: negative or non-finite intensity, ignored",
+                light.index()
+            ));
+            return;
+        }
+        use gltf::khr_lights_punctual::Kind;
+        self.desc.lights.push(match light.kind() {
+            Kind::Point => PunctualLightDesc::Point {
+                position,
+                intensity: color,
+            },
+            Kind::Directional => PunctualLightDesc::Directional {
+                direction,
+                irradiance: color,
+            },
+            Kind::Spot {
+                inner_cone_angle,
+                outer_cone_angle,
+            } => PunctualLightDesc::Spot {
+                position,
+                direction,
+                intensity: color,
+                inner_cone: inner_cone_angle.clamp(0.0, outer_cone_angle),
+                outer_cone: outer_cone_angle.clamp(0.0, std::f32::consts::FRAC_PI_2),
+            },
+        });
+    }
+
+    fn add_mesh(&mut self, mesh: &gltf::Mesh, world: Mat4) -> Result<(), SceneError> {
+        let name = mesh
+            .name()
+            .map_or_else(|| format!("mesh {}", mesh.index()), str::to_string);
+        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+        let flip = world.determinant() < 0.0;
+        for prim in mesh.primitives() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                self.desc.warnings.push(format!(
+                    "{name}: primitive with mode {:?} skipped (only TRIANGLES)",
+                    prim.mode()
+                ));
+                continue;
+            }
+            let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+            let Some(positions) = reader.read_positions() else {
+                return Err(err(format!("{name}: primitive without POSITION")));
+            };
+            let positions: Vec<Vec3> = positions
+                .map(|p| world.transform_point3(Vec3::from(p)))
+                .collect();
+            if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+                return Err(err(format!("{name}: position {i} is NaN or infinite")));
+            }
+            let normals = reader.read_normals().map(|ns| {
+                ns.map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero())
+                    .collect::<Vec<_>>()
+            });
+            let uvs = reader
+                .read_tex_coords(0)
+                .map(|t| t.into_f32().map(Vec2::from).collect::<Vec<_>>());
+            let mut indices: Vec<u32> = match reader.read_indices() {
+                Some(i) => i.into_u32().collect(),
+                None => (0..positions.len() as u32).collect(),
+            };
+            if indices.len() % 3 != 0 {
+                self.desc.warnings.push(format!(
+                    "{name}: {} trailing indices ignored",
+                    indices.len() % 3
+                ));
+                indices.truncate(indices.len() / 3 * 3);
+            }
+            if flip {
+                for tri in indices.chunks_exact_mut(3) {
+                    tri.swap(1, 2);
+                }
+            }
+            let material = self.material(prim.material())?;
+            self.desc.meshes.push(MeshDesc {
+                name: name.clone(),
+                positions,
+                normals,
+                uvs,
+                indices,
+                material,
+            });
+        }
+        Ok(())
+    }
+
+    fn material(&mut self, m: gltf::Material) -> Result<u32, SceneError> {
+        if let Some(&i) = self.material_index.get(&m.index()) {
+            return Ok(i);
+        }
+        let pbr = m.pbr_metallic_roughness();
+        let base = pbr.base_color_factor();
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let mut material = Material {
+            name: m.name().unwrap_or("").to_string(),
+            base_color: Vec3::new(base[0], base[1], base[2]),
+            metallic: pbr.metallic_factor(),
+            roughness: pbr.roughness_factor(),
+            transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()),
+            ior: m.ior().unwrap_or(1.5),
+            emission: Vec3::from(m.emissive_factor()) * strength,
+            double_sided: m.double_sided(),
+            ..Default::default()
+        };
+        let label = material.name.clone();
+        let checks = [
+            ("baseColorFactor", material.base_color.is_finite()),
+            ("metallicFactor", material.metallic.is_finite()),
+            ("roughnessFactor", material.roughness.is_finite()),
+            (
+                "emission",
+                material.emission.is_finite() && material.emission.min_element() >= 0.0,
+            ),
+            ("ior", material.ior.is_finite() && material.ior > 0.0),
+        ];
+        for (what, ok) in checks {
+            if !ok {
+                return Err(err(format!("material '{label}': invalid {what}")));
+            }
+        }
+        material.base_color_texture = pbr
+            .base_color_texture()
+            .and_then(|t| self.texture(&t.texture(), t.tex_coord(), true));
+        material.metallic_roughness_texture = pbr
+            .metallic_roughness_texture()
+            .and_then(|t| self.texture(&t.texture(), t.tex_coord(), false));
+        material.emissive_texture = m
+            .emissive_texture()
+            .and_then(|t| self.texture(&t.texture(), t.tex_coord(), true));
+        material.normal_texture = m.normal_texture().and_then(|t| {
+            self.texture(&t.texture(), t.tex_coord(), false)
+                .map(|r| (r, t.scale()))
+        });
+        let i = self.desc.materials.len() as u32;
+        self.desc.materials.push(material);
+        self.material_index.insert(m.index(), i);
+        Ok(i)
+    }
+
+    /// Decodes an image once, to RGBA8; None (with a warning) when it cannot be read.
+    fn image_rgba8(&mut self, image: &gltf::Image) -> Option<(usize, usize, Vec<u8>)> {
+        if let Some(cached) = self.images.get(&image.index()) {
+            return cached.clone();
+        }
+        let decoded =
+            match gltf::image::Data::from_source(image.source(), Some(self.base), self.buffers) {
+                Ok(data) => to_rgba8(&data),
+                Err(e) => {
+                    self.desc.warnings.push(format!(
+                        "image {}: cannot be read ({e}); texture ignored",
+                        image.index()
+                    ));
+                    None
+                }
+            };
+        self.images.insert(image.index(), decoded.clone());
+        decoded
+    }
+
+    fn texture(
+        &mut self,
+        texture: &gltf::Texture,
+        tex_coord: u32,
+        srgb: bool,
+    ) -> Option<TextureRef> {
+        if tex_coord != 0 {
+            self.desc.warnings.push(format!(
+                "texture {}: only TEXCOORD_0 is supported",
+                texture.index()
+            ));
+        }
+        let key = (texture.index(), srgb);
+        if let Some(&i) = self.texture_index.get(&key) {
+            return Some(TextureRef { texture: i });
+        }
+        let (w, h, rgba) = self.image_rgba8(&texture.source())?;
+        let wrap = |m: gltf::texture::WrappingMode| match m {
+            gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+            gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        };
+        let sampler = texture.sampler();
+        let tex = Texture::from_rgba8(
+            w,
+            h,
+            &rgba,
+            srgb,
+            wrap(sampler.wrap_s()),
+            wrap(sampler.wrap_t()),
+        );
+        let i = self.desc.textures.len() as u32;
+        self.desc.textures.push(tex);
+        self.texture_index.insert(key, i);
+        let _ = self.document;
+        Some(TextureRef { texture: i })
+    }
+}
+
+fn to_rgba8(data: &gltf::image::Data) -> Option<(usize, usize, Vec<u8>)> {
+    use gltf::image::Format;
+    let (w, h) = (data.width as usize, data.height as usize);
+    let px = &data.pixels;
+    let n = w.checked_mul(h)?;
+    let (channels, bytes) = match data.format {
+        Format::R8 => (1, 1),
+        Format::R8G8 => (2, 1),
+        Format::R8G8B8 => (3, 1),
+        Format::R8G8B8A8 => (4, 1),
+        Format::R16 => (1, 2),
+        Format::R16G16 => (2, 2),
+        Format::R16G16B16 => (3, 2),
+        Format::R16G16B16A16 => (4, 2),
+        _ => return None,
+    };
+    if px.len() < n * channels * bytes || n == 0 {
+        return None;
+    }
+    let mut out = Vec::with_capacity(n * 4);
+    for i in 0..n {
+        // 16-bit channels are little-endian; their high byte is the 8-bit value.
+        let c = |k: usize| px[(i * channels + k) * bytes + bytes - 1];
+        let rgba = match channels {
+            1 => [c(0), c(0), c(0), 255],
+            2 => [c(0), c(1), 0, 255],
+            3 => [c(0), c(1), c(2), 255],
+            _ => [c(0), c(1), c(2), c(3)],
+        };
+        out.extend_from_slice(&rgba);
+    }
+    Some((w, h, out))
+}

@@ -1,0 +1,321 @@
+//! Progressive render sessions (design.md section 6): passes run on a background thread that
+//! drives a rayon pool; after every pass the newest frame is published through an `ArcSwap`,
+//! so a reader (the viewer's UI thread, the command line's progress bar) gets it without
+//! waiting on any lock the workers hold, and frames are never queued: the newest wins.
+//! Cancellation is checked per image row, so it takes effect within a fraction of a pass.
+
+use crate::camera::PerspectiveCamera;
+use crate::image::Image;
+use crate::integrators::{self, Integrator, ParamValues, RenderContext};
+use crate::scene::Scene;
+use arc_swap::ArcSwap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+#[derive(Clone)]
+pub struct SessionConfig {
+    pub scene: Arc<Scene>,
+    pub integrator: String,
+    /// Overrides of the integrator's defaults.
+    pub params: ParamValues,
+    pub width: u32,
+    pub height: u32,
+    pub seed: u64,
+    /// Worker threads; 0 means one per core.
+    pub threads: usize,
+    /// Stop after this many passes.
+    pub max_passes: Option<u64>,
+    /// Stop after the pass during which this much time has passed.
+    pub time_limit: Option<Duration>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RunState {
+    Running,
+    Paused,
+    /// Reached its pass or time limit.
+    Finished,
+    Cancelled,
+}
+
+/// A snapshot of a session: the normalised estimate and its counters.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub image: Arc<Image>,
+    pub passes: u64,
+    pub samples: u64,
+    pub rays: u64,
+    pub dropped: u64,
+    pub elapsed: Duration,
+    pub state: RunState,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    #[error("unknown integrator '{0}' (known: {1})")]
+    UnknownIntegrator(String, String),
+    #[error("{0}")]
+    InvalidParameter(String),
+    #[error("invalid resolution {0}x{1}: width and height must be 1 to 16384")]
+    InvalidResolution(u32, u32),
+    #[error("cannot start worker threads: {0}")]
+    Threads(String),
+}
+
+struct Shared {
+    frame: ArcSwap<Frame>,
+    cancel: AtomicBool,
+    paused: Mutex<bool>,
+    resume: Condvar,
+    live_changes: Mutex<Vec<(String, f64)>>,
+}
+
+pub struct Session {
+    shared: Arc<Shared>,
+    worker: Option<JoinHandle<()>>,
+    params: ParamValues,
+    integrator: &'static integrators::IntegratorInfo,
+    threads: usize,
+}
+
+impl Session {
+    /// Validates the configuration and starts rendering at once.
+    pub fn start(config: SessionConfig) -> Result<Session, SessionError> {
+        let info = integrators::find(&config.integrator).ok_or_else(|| {
+            let known: Vec<_> = integrators::registry().iter().map(|i| i.name).collect();
+            SessionError::UnknownIntegrator(config.integrator.clone(), known.join(", "))
+        })?;
+        let params = integrators::resolve_params(info, &config.params)
+            .map_err(SessionError::InvalidParameter)?;
+        let (w, h) = (config.width, config.height);
+        if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
+            return Err(SessionError::InvalidResolution(w, h));
+        }
+        let threads = if config.threads == 0 {
+            std::thread::available_parallelism().map_or(1, |n| n.get())
+        } else {
+            config.threads
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("caustica-worker-{i}"))
+            .build()
+            .map_err(|e| SessionError::Threads(e.to_string()))?;
+        let camera = PerspectiveCamera::new(&config.scene.camera, w, h);
+        let ctx = RenderContext {
+            scene: config.scene.clone(),
+            camera,
+            seed: config.seed,
+        };
+        let integrator = (info.create)(ctx, &params);
+        let shared = Arc::new(Shared {
+            frame: ArcSwap::from_pointee(Frame {
+                image: Arc::new(Image::new(w as usize, h as usize)),
+                passes: 0,
+                samples: 0,
+                rays: 0,
+                dropped: 0,
+                elapsed: Duration::ZERO,
+                state: RunState::Running,
+            }),
+            cancel: AtomicBool::new(false),
+            paused: Mutex::new(false),
+            resume: Condvar::new(),
+            live_changes: Mutex::new(Vec::new()),
+        });
+        let worker_shared = shared.clone();
+        let worker = std::thread::Builder::new()
+            .name("caustica-session".into())
+            .spawn(move || {
+                run(
+                    worker_shared,
+                    integrator,
+                    pool,
+                    config.max_passes,
+                    config.time_limit,
+                )
+            })
+            .map_err(|e| SessionError::Threads(e.to_string()))?;
+        Ok(Session {
+            shared,
+            worker: Some(worker),
+            params,
+            integrator: info,
+            threads,
+        })
+    }
+
+    /// The newest frame; never blocks on the workers.
+    pub fn frame(&self) -> Arc<Frame> {
+        self.shared.frame.load_full()
+    }
+
+    pub fn params(&self) -> &ParamValues {
+        &self.params
+    }
+
+    pub fn integrator(&self) -> &'static integrators::IntegratorInfo {
+        self.integrator
+    }
+
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    pub fn is_done(&self) -> bool {
+        matches!(self.frame().state, RunState::Finished | RunState::Cancelled)
+    }
+
+    /// Asks the workers to stop; the pass under way is abandoned.
+    pub fn cancel(&self) {
+        self.shared.cancel.store(true, Ordering::Relaxed);
+        self.set_paused(false);
+    }
+
+    pub fn set_paused(&self, paused: bool) {
+        let mut p = self.shared.paused.lock().unwrap_or_else(|e| e.into_inner());
+        *p = paused;
+        self.shared.resume.notify_all();
+    }
+
+    /// Changes a parameter that is live for this integrator, from the next pass on.
+    pub fn set_live_param(&mut self, name: &str, value: f64) -> Result<(), String> {
+        let spec = self
+            .integrator
+            .params
+            .iter()
+            .find(|p| p.name == name)
+            .ok_or_else(|| {
+                format!(
+                    "integrator '{}' has no parameter '{name}'",
+                    self.integrator.name
+                )
+            })?;
+        if !spec.live {
+            return Err(format!(
+                "{name} cannot change while rendering: restart the session"
+            ));
+        }
+        integrators::check_param(spec, value)?;
+        self.params.insert(name.to_string(), value);
+        self.shared
+            .live_changes
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push((name.to_string(), value));
+        Ok(())
+    }
+
+    /// Waits until the session has finished or was cancelled, and returns its last frame.
+    pub fn wait(mut self) -> Arc<Frame> {
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+        self.frame()
+    }
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        self.cancel();
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+    }
+}
+
+fn run(
+    shared: Arc<Shared>,
+    mut integrator: Box<dyn Integrator>,
+    pool: rayon::ThreadPool,
+    max_passes: Option<u64>,
+    time_limit: Option<Duration>,
+) {
+    let start = Instant::now();
+    let mut paused_for = Duration::ZERO;
+    let mut totals = (0u64, 0u64, 0u64, 0u64); // passes, samples, rays, dropped
+    let publish =
+        |image: Arc<Image>, totals: (u64, u64, u64, u64), elapsed: Duration, state: RunState| {
+            shared.frame.store(Arc::new(Frame {
+                image,
+                passes: totals.0,
+                samples: totals.1,
+                rays: totals.2,
+                dropped: totals.3,
+                elapsed,
+                state,
+            }));
+        };
+    let mut image = shared.frame.load().image.clone();
+    loop {
+        if shared.cancel.load(Ordering::Relaxed) {
+            publish(
+                image,
+                totals,
+                start.elapsed() - paused_for,
+                RunState::Cancelled,
+            );
+            return;
+        }
+        if max_passes.is_some_and(|m| totals.0 >= m)
+            || time_limit.is_some_and(|t| start.elapsed() - paused_for >= t)
+        {
+            publish(
+                image,
+                totals,
+                start.elapsed() - paused_for,
+                RunState::Finished,
+            );
+            return;
+        }
+        {
+            let mut paused = shared.paused.lock().unwrap_or_else(|e| e.into_inner());
+            if *paused {
+                let pause_start = Instant::now();
+                publish(
+                    image.clone(),
+                    totals,
+                    start.elapsed() - paused_for,
+                    RunState::Paused,
+                );
+                while *paused && !shared.cancel.load(Ordering::Relaxed) {
+                    paused = shared
+                        .resume
+                        .wait(paused)
+                        .unwrap_or_else(|e| e.into_inner());
+                }
+                paused_for += pause_start.elapsed();
+                continue;
+            }
+        }
+        for (name, value) in std::mem::take(
+            &mut *shared
+                .live_changes
+                .lock()
+                .unwrap_or_else(|e| e.into_inner()),
+        ) {
+            integrator.set_live_param(&name, value);
+        }
+        let pass = totals.0;
+        match pool.install(|| integrator.render_pass(pass, &shared.cancel)) {
+            Ok(stats) => {
+                totals = (
+                    totals.0 + 1,
+                    totals.1 + stats.samples,
+                    totals.2 + stats.rays,
+                    totals.3 + stats.dropped,
+                );
+                image = Arc::new(integrator.image());
+                publish(
+                    image.clone(),
+                    totals,
+                    start.elapsed() - paused_for,
+                    RunState::Running,
+                );
+            }
+            Err(integrators::Cancelled) => continue,
+        }
+    }
+}
