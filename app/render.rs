@@ -167,16 +167,15 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
                 .unwrap_or_else(|_| ProgressStyle::default_spinner()),
         ),
     };
-    let mut frame = session.frame();
     while !session.is_done() {
         std::thread::sleep(Duration::from_millis(100));
-        frame = session.frame();
+        let frame = session.frame();
         bar.set_position(frame.passes);
         let secs = frame.elapsed.as_secs_f64().max(1e-9);
         bar.set_message(format!("{:.2} Mrays/s", frame.rays as f64 / secs / 1e6));
     }
     let threads = session.threads();
-    frame = session.wait();
+    let frame = session.wait();
     bar.finish_and_clear();
 
     let secs = frame.elapsed.as_secs_f64().max(1e-9);

@@ -1,0 +1,91 @@
+//! Scenes with closed-form radiance, rendered by the path tracer through the session API.
+//! Tolerances come from the estimator's own variance: every pixel has the same expectation,
+//! so the spread of pixel values estimates the per-pixel standard deviation.
+
+use caustica_renderer::image::Image;
+use caustica_renderer::integrators::ParamValues;
+use caustica_renderer::procedural::{emissive_sphere, sphere_with_point_light};
+use caustica_renderer::scene::{Scene, SceneDescription};
+use caustica_renderer::session::{RunState, Session, SessionConfig};
+use std::sync::Arc;
+
+fn render(desc: SceneDescription, passes: u64, size: u32, threads: usize) -> Image {
+    let scene = Arc::new(Scene::build(desc).expect("scene builds"));
+    let session = Session::start(SessionConfig {
+        scene,
+        integrator: "pt".into(),
+        params: ParamValues::new(),
+        width: size,
+        height: size,
+        seed: 7,
+        threads,
+        max_passes: Some(passes),
+        time_limit: None,
+    })
+    .expect("session starts");
+    let frame = session.wait();
+    assert_eq!(frame.state, RunState::Finished);
+    assert_eq!(
+        frame.dropped, 0,
+        "no sample may be NaN, infinite or negative here"
+    );
+    Arc::try_unwrap(frame.image.clone()).unwrap_or_else(|a| (*a).clone())
+}
+
+/// Checks that every pixel's estimate of `expected` is within what its noise allows, and
+/// that the image mean is within `bias` (a known systematic error) plus 4 standard errors.
+fn assert_uniform_radiance(img: &Image, expected: f64, bias: f64) {
+    let values: Vec<f64> = img
+        .pixels
+        .iter()
+        .flat_map(|p| [p.x as f64, p.y as f64, p.z as f64])
+        .collect();
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let sd = (values.iter().map(|v| (v - expected).powi(2)).sum::<f64>() / n).sqrt();
+    let worst = values
+        .iter()
+        .map(|v| (v - expected).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        (mean - expected).abs() <= bias + 4.0 * sd / n.sqrt(),
+        "image mean {mean} vs exact {expected} (pixel sd {sd}, {} values)",
+        n
+    );
+    // 5.5 sigma: with a few thousand pixels a Gaussian tail this far has odds below 1e-4.
+    assert!(
+        worst <= bias + 5.5 * sd,
+        "a pixel is {worst} from {expected}, pixel sd {sd}"
+    );
+    assert!(
+        sd < 0.2 * expected,
+        "the estimate is too noisy to test anything: sd {sd}"
+    );
+}
+
+#[test]
+fn point_light_in_diffuse_sphere_gives_unit_radiance() {
+    // rho = 0.5, I = pi at the centre of the unit sphere: L = rho E / (pi (1 - rho)) = 1.
+    // A tessellated sphere's facets are nearer than 1 by at most 1 - cos(pi / 128): the
+    // direct irradiance is high by at most 2 (1 - cos(pi/128)) / cos^2 = 6e-4 of it.
+    let img = render(sphere_with_point_light(128), 64, 48, 0);
+    assert_uniform_radiance(&img, 1.0, 2e-3);
+}
+
+#[test]
+fn closed_emissive_sphere_converges_to_le_over_one_minus_rho() {
+    // rho = 0.8 needs ~5 bounces on average and exercises Russian roulette; exact for any
+    // closed surface: L = Le + rho L.
+    let (le, rho) = (0.2, 0.8);
+    let img = render(emissive_sphere(le, rho, 64), 64, 48, 0);
+    assert_uniform_radiance(&img, (le / (1.0 - rho)) as f64, 1e-6);
+}
+
+#[test]
+fn same_seed_gives_identical_images_on_one_and_two_threads() {
+    let desc = caustica_renderer::procedural::cornell_box(true);
+    let one = render(desc.clone(), 4, 40, 1);
+    let two = render(desc, 4, 40, 2);
+    assert!(one.mean_luminance() > 0.0);
+    assert_eq!(one, two, "thread count changed the image");
+}
