@@ -26,7 +26,7 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u64).range(1..))]
     pub spp: Option<u64>,
     /// Render for this many seconds instead of a number of samples.
-    #[arg(long, value_parser = parse_seconds)]
+    #[arg(long, value_parser = parse_seconds, allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Image width in pixels.
     #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
@@ -108,7 +108,14 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     if let Some(d) = args.max_depth {
         given.insert("max_depth".into(), d as f64);
     }
-    let params = integrators::resolve_params(info, &given).map_err(Failure::Usage)?;
+    // Each integrator parameter has its flag: max_depth is --max-depth.
+    let params = integrators::resolve_params(info, &given).map_err(|e| {
+        let flag = given
+            .keys()
+            .find(|k| e.starts_with(k.as_str()))
+            .map(|k| k.replace('_', "-"));
+        Failure::Usage(flag.map_or(e.clone(), |f| format!("--{f}: {e}")))
+    })?;
     let out_dir = args
         .output
         .parent()

@@ -1,0 +1,109 @@
+//! Progressive sessions: frames while rendering, pause and resume, cancellation, parameters,
+//! and the bundled assets being exactly what their generator writes.
+
+use caustica_renderer::integrators::ParamValues;
+use caustica_renderer::procedural::{bundled_assets, cornell_box};
+use caustica_renderer::scene::Scene;
+use caustica_renderer::session::{RunState, Session, SessionConfig, SessionError};
+use std::sync::Arc;
+use std::time::Duration;
+
+fn config(passes: Option<u64>) -> SessionConfig {
+    SessionConfig {
+        scene: Arc::new(Scene::build(cornell_box(true)).unwrap()),
+        integrator: "pt".into(),
+        params: ParamValues::new(),
+        width: 64,
+        height: 64,
+        seed: 1,
+        threads: 2,
+        max_passes: passes,
+        time_limit: None,
+    }
+}
+
+fn wait_for(session: &Session, what: impl Fn(&caustica_renderer::session::Frame) -> bool) {
+    for _ in 0..2000 {
+        if what(&session.frame()) {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    panic!("the session never reached the expected state");
+}
+
+#[test]
+fn frames_arrive_while_rendering_and_cancel_stops_the_session() {
+    let session = Session::start(config(None)).unwrap();
+    wait_for(&session, |f| f.passes >= 3);
+    let frame = session.frame();
+    assert_eq!(frame.samples, frame.passes * 64 * 64);
+    assert!(frame.rays >= frame.samples && frame.image.mean_luminance() > 0.0);
+    session.cancel();
+    let last = session.wait();
+    assert_eq!(last.state, RunState::Cancelled);
+    assert!(last.passes >= frame.passes);
+}
+
+#[test]
+fn pause_holds_the_pass_count_and_resume_continues() {
+    let session = Session::start(config(None)).unwrap();
+    wait_for(&session, |f| f.passes >= 1);
+    session.set_paused(true);
+    wait_for(&session, |f| f.state == RunState::Paused);
+    let held = session.frame().passes;
+    std::thread::sleep(Duration::from_millis(100));
+    assert_eq!(session.frame().passes, held, "a paused session rendered");
+    session.set_paused(false);
+    wait_for(&session, |f| {
+        f.passes > held && f.state == RunState::Running
+    });
+}
+
+#[test]
+fn a_pass_limit_finishes_with_exactly_that_many_passes() {
+    let frame = Session::start(config(Some(5))).unwrap().wait();
+    assert_eq!((frame.passes, frame.state), (5, RunState::Finished));
+}
+
+#[test]
+fn bad_configurations_are_refused_before_any_thread_starts() {
+    let mut c = config(Some(1));
+    c.integrator = "nope".into();
+    assert!(matches!(
+        Session::start(c),
+        Err(SessionError::UnknownIntegrator(..))
+    ));
+    let mut c = config(Some(1));
+    c.params.insert("max_depth".into(), -3.0);
+    assert!(matches!(
+        Session::start(c),
+        Err(SessionError::InvalidParameter(_))
+    ));
+    let mut c = config(Some(1));
+    c.width = 0;
+    assert!(matches!(
+        Session::start(c),
+        Err(SessionError::InvalidResolution(0, 64))
+    ));
+}
+
+#[test]
+fn parameters_that_invalidate_the_estimate_are_not_live() {
+    let mut session = Session::start(config(Some(1))).unwrap();
+    let e = session.set_live_param("max_depth", 3.0).unwrap_err();
+    assert!(e.contains("restart"), "{e}");
+    assert!(session.set_live_param("no_such_thing", 1.0).is_err());
+}
+
+#[test]
+fn bundled_assets_are_regenerable() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets");
+    for (name, text) in bundled_assets() {
+        let committed = std::fs::read_to_string(dir.join(name)).unwrap_or_default();
+        assert!(
+            committed == text,
+            "assets/{name} differs from its generator: run `cargo run -p caustica-renderer --example make_assets -- assets`"
+        );
+    }
+}
