@@ -32,13 +32,14 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => match render::run(&args) {
             Ok(()) => ExitCode::SUCCESS,
             Err(render::Failure::Usage(msg)) => {
-                let mut cmd = Cli::command();
-                let sub = cmd
-                    .find_subcommand_mut("render")
-                    .map(|c| c.clone())
-                    .unwrap_or(cmd);
-                let mut sub = sub;
-                sub.error(clap::error::ErrorKind::ValueValidation, msg)
+                let cmd = Cli::command();
+                let mut render = cmd
+                    .find_subcommand("render")
+                    .cloned()
+                    .unwrap_or(cmd)
+                    .bin_name("caustica render");
+                render
+                    .error(clap::error::ErrorKind::ValueValidation, msg)
                     .exit()
             }
             Err(render::Failure::Runtime(e)) => {
