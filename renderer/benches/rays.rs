@@ -1,1 +1,139 @@
-fn main() {}
+//! Ray-tracing and path-tracing throughput on the bundled cornell-glass scene:
+//!
+//! ```text
+//! cargo bench -p caustica-renderer --bench rays
+//! ```
+//!
+//! Closest-hit and occlusion queries for camera rays (coherent) and for diffuse-bounce rays
+//! (cosine-distributed from the camera rays' hits, incoherent), on one thread and on all
+//! cores; and path-tracer samples per second. Throughput is reported as elements (rays or
+//! samples) per second.
+
+use caustica_renderer::camera::PerspectiveCamera;
+use caustica_renderer::geometry::Ray;
+use caustica_renderer::integrators::path::{PathIntegrator, PathSettings};
+use caustica_renderer::integrators::{Integrator, RenderContext};
+use caustica_renderer::sampling::sampler::Sampler;
+use caustica_renderer::sampling::warp::sample_cosine_hemisphere;
+use caustica_renderer::scene::Scene;
+use caustica_renderer::scene::gltf::load;
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::Vec2;
+use rayon::prelude::*;
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+const SIZE: u32 = 256;
+
+fn scene() -> Arc<Scene> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/cornell-glass.gltf");
+    Arc::new(load(&path).expect("the bundled scene loads"))
+}
+
+fn camera_rays(scene: &Scene) -> Vec<Ray> {
+    let camera = PerspectiveCamera::new(&scene.camera, SIZE, SIZE);
+    let mut s = Sampler::new(1);
+    (0..SIZE * SIZE)
+        .map(|i| {
+            s.start_pixel_sample(i as u64, 0);
+            camera.generate_ray(Vec2::new((i % SIZE) as f32, (i / SIZE) as f32) + s.get_2d())
+        })
+        .collect()
+}
+
+fn bounce_rays(scene: &Scene, camera: &[Ray]) -> Vec<Ray> {
+    let mut s = Sampler::new(2);
+    camera
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| {
+            let si = scene.intersect(r)?;
+            s.start_pixel_sample(i as u64, 1);
+            let local = sample_cosine_hemisphere(s.get_2d());
+            let n = if si.n.dot(si.wo) < 0.0 { -si.n } else { si.n };
+            let frame = caustica_renderer::geometry::Frame::from_z(n);
+            Some(si.spawn_ray(frame.from_local(local)))
+        })
+        .collect()
+}
+
+fn bench_rays(c: &mut Criterion) {
+    let scene = scene();
+    let camera = camera_rays(&scene);
+    let bounce = bounce_rays(&scene, &camera);
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    for threads in [1, all] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for (kind, rays) in [("camera", &camera), ("diffuse-bounce", &bounce)] {
+            let mut group = c.benchmark_group(format!("{kind} rays, {threads} thread(s)"));
+            group.throughput(Throughput::Elements(rays.len() as u64));
+            group.sample_size(20);
+            group.bench_function("closest hit", |b| {
+                b.iter(|| {
+                    pool.install(|| {
+                        rays.par_iter()
+                            .with_min_len(1024)
+                            .filter(|r| scene.intersect(r).is_some())
+                            .count()
+                    })
+                })
+            });
+            group.bench_function("occlusion", |b| {
+                b.iter(|| {
+                    pool.install(|| {
+                        rays.par_iter()
+                            .with_min_len(1024)
+                            .filter(|r| scene.occluded(r))
+                            .count()
+                    })
+                })
+            });
+            group.finish();
+        }
+    }
+}
+
+fn bench_path_tracer(c: &mut Criterion) {
+    let scene = scene();
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let size = 64;
+    for threads in [1, all] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let ctx = RenderContext {
+            scene: scene.clone(),
+            camera: PerspectiveCamera::new(&scene.camera, size, size),
+            seed: 0,
+        };
+        let mut integrator = PathIntegrator::new(ctx, PathSettings::default());
+        let cancel = AtomicBool::new(false);
+        let mut group = c.benchmark_group(format!("path tracer, {threads} thread(s)"));
+        group.throughput(Throughput::Elements((size * size) as u64));
+        group.sample_size(20);
+        let mut pass = 0;
+        group.bench_function("samples", |b| {
+            b.iter(|| {
+                pass += 1;
+                pool.install(|| integrator.render_pass(pass, &cancel))
+                    .unwrap()
+            })
+        });
+        group.finish();
+    }
+}
+
+fn bench_load(c: &mut Criterion) {
+    let mut group = c.benchmark_group("scene");
+    group.sample_size(20);
+    group.bench_function("load cornell-glass and build its BVH", |b| b.iter(scene));
+    group.finish();
+}
+
+criterion_group!(benches, bench_rays, bench_path_tracer, bench_load);
+criterion_main!(benches);
