@@ -146,7 +146,7 @@ pub fn cuboid(name: &str, xf: Affine3A, material: u32) -> MeshDesc {
     mesh
 }
 
-fn camera_looking(from: Vec3, to: Vec3, yfov_degrees: f32) -> CameraDesc {
+pub fn camera_looking(from: Vec3, to: Vec3, yfov_degrees: f32) -> CameraDesc {
     let rotation = Quat::from_rotation_arc(Vec3::NEG_Z, (to - from).normalize());
     CameraDesc {
         camera_to_world: Affine3A::from_rotation_translation(rotation, from),
