@@ -352,3 +352,91 @@ fn random_corruption_never_panics() {
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn textures_are_decoded_as_the_spec_says() {
+    use caustica_renderer::geometry::Ray;
+    use caustica_renderer::material::Bsdf;
+    let dir = temp_dir("textures");
+    let png = |name: &str, rgb: [u8; 3]| {
+        image::RgbImage::from_pixel(2, 2, image::Rgb(rgb))
+            .save(dir.join(name))
+            .unwrap();
+    };
+    png("base.png", [128, 64, 255]);
+    png("mr.png", [0, 128, 255]);
+    png("emit.png", [255, 128, 0]);
+    // A normal map tilted towards +u: about (0.5, 0, 0.866) in tangent space.
+    png("normal.png", [191, 128, 238]);
+    let floor = |name: &str, x: f32, material| {
+        let c = |dx: f32, dz: f32| Vec3::new(x + dx, 0.0, dz);
+        quad(
+            name,
+            [c(-1., 1.), c(1., 1.), c(1., -1.), c(-1., -1.)],
+            material,
+        )
+    };
+    let desc = SceneDescription {
+        meshes: vec![floor("textured", 0.0, 0), floor("metal", 3.0, 1)],
+        materials: vec![Material::diffuse(Vec3::ONE), Material::diffuse(Vec3::ONE)],
+        ..Default::default()
+    };
+    let mut v = to_gltf(&desc);
+    v["images"] =
+        json!([{"uri": "base.png"}, {"uri": "mr.png"}, {"uri": "emit.png"}, {"uri": "normal.png"}]);
+    v["samplers"] = json!([{}]);
+    v["textures"] =
+        json!([{"source": 0, "sampler": 0}, {"source": 1}, {"source": 2}, {"source": 3}]);
+    v["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    v["materials"][0]["emissiveFactor"] = json!([1.0, 1.0, 1.0]);
+    v["materials"][0]["emissiveTexture"] = json!({"index": 2});
+    v["materials"][0]["normalTexture"] = json!({"index": 3});
+    v["materials"][1]["pbrMetallicRoughness"]["metallicFactor"] = json!(1.0);
+    v["materials"][1]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = json!({"index": 1});
+    let scene = load(&write_json(&dir, "textured.gltf", &v)).unwrap();
+    let srgb = |v: u8| caustica_renderer::scene::texture::srgb_to_linear(v as f32 / 255.0);
+
+    // Base colour and emission are sRGB-encoded.
+    let textured = scene
+        .intersect(&Ray::new(Vec3::new(0.1, 1.0, 0.2), Vec3::NEG_Y))
+        .unwrap();
+    match scene.bsdf(&textured) {
+        Bsdf::Diffuse(d) => assert!(
+            (d.r - Vec3::new(srgb(128), srgb(64), srgb(255)))
+                .abs()
+                .max_element()
+                < 1e-5,
+            "{:?}",
+            d.r
+        ),
+        other => panic!("expected the diffuse floor, got {other:?}"),
+    }
+    let e = scene.emitted(&textured, Vec3::Y);
+    assert!(
+        (e - Vec3::new(1.0, srgb(128), 0.0)).abs().max_element() < 1e-5,
+        "emission {e}"
+    );
+    // The normal map tilts the shading normal by 30 degrees, staying on the front side.
+    assert!(
+        (textured.shading.n.dot(textured.n) - 0.866).abs() < 0.01,
+        "{:?}",
+        textured.shading.n
+    );
+
+    // Metallic-roughness is linear: roughness from G (alpha = roughness^2), metalness from B.
+    let metal = scene
+        .intersect(&Ray::new(Vec3::new(3.1, 1.0, 0.2), Vec3::NEG_Y))
+        .unwrap();
+    match scene.bsdf(&metal) {
+        Bsdf::MetallicRoughness(m) => {
+            assert!(
+                (m.distrib.alpha - (128.0f32 / 255.0).powi(2)).abs() < 1e-5,
+                "alpha {}",
+                m.distrib.alpha
+            );
+            assert!((m.metallic - 1.0).abs() < 1e-6);
+        }
+        other => panic!("expected the textured metal, got {other:?}"),
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
