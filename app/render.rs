@@ -28,12 +28,12 @@ pub struct RenderArgs {
     /// Render for this many seconds instead of a number of samples.
     #[arg(long, value_parser = parse_seconds, allow_negative_numbers = true)]
     pub time: Option<f64>,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
-    pub width: u32,
-    /// Image height in pixels.
-    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(1..=16384))]
-    pub height: u32,
+    /// Image width in pixels [default: 512, or from --height and the camera's aspect ratio].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub width: Option<u32>,
+    /// Image height in pixels [default: from the width and the camera's aspect ratio, else square].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub height: Option<u32>,
     /// Seed of every random number; the same seed gives the same image on any thread count.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -94,6 +94,19 @@ fn output_format(path: &Path) -> Result<Format, Failure> {
     }
 }
 
+/// The output size: what was given, the rest from the camera's aspect ratio (width over
+/// height) when the scene has one, else square; 512 wide when neither is given.
+fn output_size(width: Option<u32>, height: Option<u32>, aspect: Option<f32>) -> (u32, u32) {
+    let aspect = aspect.filter(|a| a.is_finite() && *a > 0.0).unwrap_or(1.0) as f64;
+    let fit = |v: f64| (v.round() as u32).clamp(1, 16384);
+    match (width, height) {
+        (Some(w), Some(h)) => (w, h),
+        (Some(w), None) => (w, fit(w as f64 / aspect)),
+        (None, Some(h)) => (fit(h as f64 * aspect), h),
+        (None, None) => (512, fit(512.0 / aspect)),
+    }
+}
+
 pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let format = output_format(&args.output)?;
     let info = integrators::find(&args.integrator).ok_or_else(|| {
@@ -133,13 +146,14 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let scene = Arc::new(gltf::load(&args.scene).map_err(|e| anyhow!(e))?);
     let si = &scene.info;
     eprintln!(
-        "{}: {} triangles, {} lights, loaded in {:.2} s (BVH {:.3} s)",
+        "{}: {} triangles, {} lights, loaded in {:.1} ms (BVH {:.1} ms)",
         args.scene.display(),
         si.triangles,
         si.lights,
-        si.load_time.as_secs_f64(),
-        si.bvh_build_time.as_secs_f64()
+        si.load_time.as_secs_f64() * 1e3,
+        si.bvh_build_time.as_secs_f64() * 1e3
     );
+    let (width, height) = output_size(args.width, args.height, scene.camera.aspect);
     for w in &si.warnings {
         eprintln!("warning: {w}");
     }
@@ -153,8 +167,8 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         scene: scene.clone(),
         integrator: info.name.to_string(),
         params: params.clone(),
-        width: args.width,
-        height: args.height,
+        width,
+        height,
         seed: args.seed,
         threads: args.threads,
         max_passes: spp,
@@ -214,4 +228,18 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         args.output.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::output_size;
+
+    #[test]
+    fn output_size_follows_the_camera_aspect() {
+        assert_eq!(output_size(None, None, None), (512, 512));
+        assert_eq!(output_size(None, None, Some(16.0 / 9.0)), (512, 288));
+        assert_eq!(output_size(Some(100), None, Some(2.0)), (100, 50));
+        assert_eq!(output_size(None, Some(100), Some(2.0)), (200, 100));
+        assert_eq!(output_size(Some(30), Some(40), Some(2.0)), (30, 40));
+    }
 }
