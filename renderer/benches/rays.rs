@@ -135,5 +135,46 @@ fn bench_load(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_rays, bench_path_tracer, bench_load);
+/// Latency of `Session::cancel` while all cores render 512 x 512 passes of cornell-glass:
+/// from the call until the session has stopped (design.md section 6 asks for 50 ms at most).
+fn bench_cancel(c: &mut Criterion) {
+    use caustica_renderer::session::{Session, SessionConfig};
+    let scene = scene();
+    let mut group = c.benchmark_group("session");
+    group.sample_size(10);
+    group.bench_function("cancel latency, 512x512 cornell-glass", |b| {
+        b.iter_custom(|iters| {
+            let mut total = std::time::Duration::ZERO;
+            for _ in 0..iters {
+                let session = Session::start(SessionConfig {
+                    scene: scene.clone(),
+                    integrator: "pt".into(),
+                    params: Default::default(),
+                    width: 512,
+                    height: 512,
+                    seed: 0,
+                    threads: 0,
+                    max_passes: None,
+                    time_limit: None,
+                })
+                .unwrap();
+                std::thread::sleep(std::time::Duration::from_millis(150));
+                let start = std::time::Instant::now();
+                session.cancel();
+                session.wait();
+                total += start.elapsed();
+            }
+            total
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    bench_rays,
+    bench_path_tracer,
+    bench_load,
+    bench_cancel
+);
 criterion_main!(benches);

@@ -61,3 +61,21 @@ impl Film {
 pub fn sanitize(l: Vec3) -> Option<Vec3> {
     (l.is_finite() && l.min_element() >= 0.0).then_some(l)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invalid_estimates_are_refused_and_valid_ones_averaged() {
+        assert_eq!(sanitize(Vec3::new(f32::NAN, 0.0, 0.0)), None);
+        assert_eq!(sanitize(Vec3::new(0.0, f32::INFINITY, 0.0)), None);
+        assert_eq!(sanitize(Vec3::new(0.0, 0.0, -1e-3)), None);
+        assert_eq!(sanitize(Vec3::ONE), Some(Vec3::ONE));
+        let mut film = Film::new(1, 1);
+        film.add_pass(&[Vec3::splat(1.0)]);
+        film.add_pass(&[Vec3::splat(3.0)]);
+        assert_eq!(film.image().pixels[0], Vec3::splat(2.0));
+        assert_eq!(film.passes(), 2);
+    }
+}

@@ -440,3 +440,22 @@ fn textures_are_decoded_as_the_spec_says() {
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn non_triangle_primitives_are_skipped_with_a_warning_naming_the_mesh() {
+    let dir = temp_dir("modes");
+    let mut v = to_gltf(&cornell_box(false));
+    v["meshes"][1]["primitives"][0]["mode"] = json!(1); // LINES
+    let scene = load(&write_json(&dir, "lines.gltf", &v)).unwrap();
+    assert!(
+        scene
+            .info
+            .warnings
+            .iter()
+            .any(|w| w.contains("ceiling") && w.contains("skipped")),
+        "{:?}",
+        scene.info.warnings
+    );
+    assert_eq!(scene.info.triangles, 2 * 5 + 12 * 2);
+    std::fs::remove_dir_all(dir).unwrap();
+}

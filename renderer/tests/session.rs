@@ -107,3 +107,35 @@ fn bundled_assets_are_regenerable() {
         );
     }
 }
+
+#[test]
+fn the_scene_is_shared_safely_between_threads() {
+    fn assert_send_sync<T: Send + Sync>() {}
+    assert_send_sync::<Scene>();
+    assert_send_sync::<caustica_renderer::session::Frame>();
+    // Many threads querying one scene at once see the same answers as one thread.
+    let scene = Arc::new(Scene::build(cornell_box(true)).unwrap());
+    let camera = caustica_renderer::camera::PerspectiveCamera::new(&scene.camera, 64, 64);
+    let trace = move |scene: &Scene| -> Vec<Option<(u32, u32)>> {
+        (0..64 * 64)
+            .map(|i| {
+                let r = camera.generate_ray(glam::Vec2::new(
+                    (i % 64) as f32 + 0.5,
+                    (i / 64) as f32 + 0.5,
+                ));
+                scene.intersect(&r).map(|s| (s.triangle, s.t.to_bits()))
+            })
+            .collect()
+    };
+    let reference = trace(&scene);
+    let handles: Vec<_> = (0..4)
+        .map(|_| {
+            let scene = scene.clone();
+            let trace = trace;
+            std::thread::spawn(move || trace(&scene))
+        })
+        .collect();
+    for h in handles {
+        assert_eq!(h.join().unwrap(), reference);
+    }
+}
