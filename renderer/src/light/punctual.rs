@@ -61,27 +61,19 @@ impl SpotLight {
         t * t
     }
 
+    /// A point light's sample, scaled by the falloff towards the reference point.
     pub fn sample_li(&self, ctx: &LightSampleContext) -> Option<LightLiSample> {
-        let d = self.position - ctx.p;
-        let dist2 = d.length_squared();
-        if !(dist2 > 0.0) {
-            return None;
-        }
-        let dist = dist2.sqrt();
-        let wi = d / dist;
-        let falloff = self.falloff((-wi).dot(self.frame.n));
+        let point = PointLight {
+            position: self.position,
+            intensity: self.intensity,
+        };
+        let mut sample = point.sample_li(ctx)?;
+        let falloff = self.falloff((-sample.wi).dot(self.frame.n));
         if falloff == 0.0 {
             return None;
         }
-        Some(LightLiSample {
-            l: self.intensity * falloff / dist2,
-            wi,
-            pdf: 1.0,
-            p_light: self.position,
-            n_light: Vec3::ZERO,
-            dist,
-            is_delta: true,
-        })
+        sample.l *= falloff;
+        Some(sample)
     }
 
     /// pbrt-v4's estimate (section 12.2.2): the cone's solid angle at the mean cut-off.
