@@ -76,7 +76,6 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
         material_index: HashMap::new(),
         texture_index: HashMap::new(),
         images: HashMap::new(),
-        document: &document,
     };
     let scene = document
         .default_scene()
@@ -144,7 +143,6 @@ fn check_views_and_accessors(
 }
 
 struct Loader<'a> {
-    document: &'a gltf::Document,
     buffers: &'a [gltf::buffer::Data],
     base: &'a Path,
     desc: SceneDescription,
@@ -409,7 +407,6 @@ impl Loader<'_> {
         let i = self.desc.textures.len() as u32;
         self.desc.textures.push(tex);
         self.texture_index.insert(key, i);
-        let _ = self.document;
         Some(TextureRef { texture: i })
     }
 }

@@ -128,11 +128,18 @@ impl SurfaceInteraction {
         Ray::new(offset_ray_origin(self.p, self.p_error, self.n, d), d)
     }
 
-    /// A shadow ray to `target` that stops just short of it.
+    /// A shadow ray to `target` that stops just short of it (empty if the target is here).
     pub fn spawn_ray_to(&self, target: Vec3) -> Ray {
         let o = offset_ray_origin(self.p, self.p_error, self.n, target - self.p);
         let d = target - o;
         let dist = d.length();
+        if !(dist > 0.0 && dist.is_finite()) {
+            return Ray {
+                o,
+                d: self.n,
+                t_max: 0.0,
+            };
+        }
         Ray {
             o,
             d: d / dist,
