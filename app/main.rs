@@ -1,23 +1,39 @@
-//! Caustica's command line: `caustica render` renders a scene headless to EXR or PNG.
-//! (The viewer will open when no subcommand is given; until then that prints the help.)
+//! Caustica's command line: `caustica [SCENE]` opens the viewer (on that scene, rendering at
+//! once); `caustica render` renders a scene headless to EXR or PNG.
 //!
-//! Exit codes: 0 success, 1 runtime error (unreadable or invalid scene, unwritable output),
-//! 2 bad arguments. Each error is one line naming the file or argument.
+//! Exit codes: 0 success, 1 runtime error (unreadable or invalid scene, unwritable output,
+//! no window), 2 bad arguments. Each error is one line naming the file or argument.
 
 mod render;
 
+use caustica::viewer::{self, Automation, ViewerOptions};
 use clap::{CommandFactory, Parser, Subcommand};
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
 
 #[derive(Parser, Debug)]
 #[command(
     name = "caustica",
     version,
-    about = "Interactive viewer for progressive, physically based light transport"
+    about = "Interactive viewer for progressive, physically based light transport",
+    args_conflicts_with_subcommands = true
 )]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// Scene to open in the viewer (.gltf or .glb); rendering starts at once.
+    scene: Option<PathBuf>,
+    /// Reference image (EXR) for the viewer's convergence plot.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Save a screenshot of the window to this PNG once the render has been shown for
+    /// --screenshot-after seconds, then quit (for scripted runs).
+    #[arg(long)]
+    screenshot: Option<PathBuf>,
+    /// Seconds of rendering before --screenshot is taken.
+    #[arg(long, default_value_t = 3.0, requires = "screenshot")]
+    screenshot_after: f64,
 }
 
 #[derive(Subcommand, Debug)]
@@ -48,9 +64,22 @@ fn main() -> ExitCode {
             }
         },
         None => {
-            let _ = Cli::command().print_help();
-            println!();
-            ExitCode::SUCCESS
+            let automation = cli.screenshot.map(|screenshot| Automation {
+                screenshot,
+                after: Duration::from_secs_f64(cli.screenshot_after.max(0.0)),
+            });
+            let options = ViewerOptions {
+                scene: cli.scene,
+                reference: cli.reference,
+                automation,
+            };
+            match viewer::run(options) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: cannot open the viewer window: {e}");
+                    ExitCode::from(1)
+                }
+            }
         }
     }
 }

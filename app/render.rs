@@ -173,6 +173,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         threads: args.threads,
         max_passes: spp,
         time_limit: args.time.map(Duration::from_secs_f64),
+        on_frame: None,
     })
     .map_err(|e| Failure::Usage(e.to_string()))?;
 

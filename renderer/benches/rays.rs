@@ -156,6 +156,7 @@ fn bench_cancel(c: &mut Criterion) {
                     threads: 0,
                     max_passes: None,
                     time_limit: None,
+                    on_frame: None,
                 })
                 .unwrap();
                 std::thread::sleep(std::time::Duration::from_millis(150));

@@ -148,20 +148,77 @@ pub fn read_exr(path: &Path) -> Result<(Image, BTreeMap<String, String>), ImageE
     Ok((image.layer_data.channel_data.pixels, metadata))
 }
 
-/// PNG of what a viewer shows: exposure (in stops) then the sRGB curve, clamped.
-pub fn write_png(path: &Path, image: &Image, exposure: f32) -> Result<(), ImageError> {
+/// How linear radiance becomes display values in [0, 1] after exposure. The viewer's shader
+/// (app/viewer/tonemap.wgsl) implements the same curves.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum ToneCurve {
+    /// Clamp to [0, 1].
+    #[default]
+    Linear,
+    /// x / (1 + x) per channel (Reinhard et al. 2002, eq. 3).
+    Reinhard,
+    /// Narkowicz's 2015 fit of the ACES reference rendering transform.
+    Filmic,
+}
+
+impl ToneCurve {
+    pub const ALL: [ToneCurve; 3] = [ToneCurve::Linear, ToneCurve::Reinhard, ToneCurve::Filmic];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ToneCurve::Linear => "Linear (clamp)",
+            ToneCurve::Reinhard => "Reinhard",
+            ToneCurve::Filmic => "Filmic (ACES fit)",
+        }
+    }
+
+    /// Index passed to the viewer's shader.
+    pub fn index(self) -> u32 {
+        self as u32
+    }
+
+    pub fn apply(self, x: f32) -> f32 {
+        let x = x.max(0.0);
+        match self {
+            ToneCurve::Linear => x.min(1.0),
+            ToneCurve::Reinhard => x / (1.0 + x),
+            ToneCurve::Filmic => {
+                ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+            }
+        }
+    }
+}
+
+/// 8-bit sRGB of what a viewer shows: exposure (in stops), the tone curve, the sRGB curve.
+pub fn display_rgb8(image: &Image, exposure: f32, curve: ToneCurve) -> Vec<u8> {
     let scale = 2f32.powf(exposure);
     let mut bytes = Vec::with_capacity(image.pixels.len() * 3);
     for p in &image.pixels {
         for c in [p.x, p.y, p.z] {
             let v = if c.is_finite() {
-                linear_to_srgb((c * scale).clamp(0.0, 1.0))
+                linear_to_srgb(curve.apply(c * scale))
             } else {
                 0.0
             };
             bytes.push((v * 255.0 + 0.5) as u8);
         }
     }
+    bytes
+}
+
+/// PNG of what a viewer shows: exposure (in stops) then the sRGB curve, clamped.
+pub fn write_png(path: &Path, image: &Image, exposure: f32) -> Result<(), ImageError> {
+    write_png_tone_mapped(path, image, exposure, ToneCurve::Linear)
+}
+
+/// PNG with a tone curve between exposure and the sRGB curve.
+pub fn write_png_tone_mapped(
+    path: &Path,
+    image: &Image,
+    exposure: f32,
+    curve: ToneCurve,
+) -> Result<(), ImageError> {
+    let bytes = display_rgb8(image, exposure, curve);
     let buffer = ::image::RgbImage::from_raw(image.width as u32, image.height as u32, bytes)
         .ok_or_else(|| ImageError::Invalid("image size does not match its pixels".into()))?;
     write_atomically(path, |tmp| {
@@ -258,6 +315,24 @@ mod tests {
             pixels: vec![Vec3::NAN],
         };
         assert!(compare(&nan, &r).is_err());
+    }
+
+    #[test]
+    fn tone_curves_are_monotone_and_bounded() {
+        for curve in ToneCurve::ALL {
+            let mut last = 0.0;
+            for i in 0..1000 {
+                let y = curve.apply(i as f32 * 0.05);
+                assert!(
+                    (0.0..=1.0).contains(&y) && y >= last,
+                    "{curve:?} at {}",
+                    i as f32 * 0.05
+                );
+                last = y;
+            }
+            assert_eq!(curve.apply(0.0), 0.0);
+        }
+        assert!((ToneCurve::Reinhard.apply(1.0) - 0.5).abs() < 1e-6);
     }
 
     #[test]

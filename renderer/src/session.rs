@@ -29,7 +29,12 @@ pub struct SessionConfig {
     pub max_passes: Option<u64>,
     /// Stop after the pass during which this much time has passed.
     pub time_limit: Option<Duration>,
+    /// Called on the session's thread whenever a new frame is published (a viewer asks for a
+    /// repaint here, so it redraws exactly when there is something new).
+    pub on_frame: Option<FrameCallback>,
 }
+
+pub type FrameCallback = Arc<dyn Fn() + Send + Sync>;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RunState {
@@ -135,6 +140,7 @@ impl Session {
                     pool,
                     config.max_passes,
                     config.time_limit,
+                    config.on_frame,
                 )
             })
             .map_err(|e| SessionError::Threads(e.to_string()))?;
@@ -232,6 +238,7 @@ fn run(
     pool: rayon::ThreadPool,
     max_passes: Option<u64>,
     time_limit: Option<Duration>,
+    on_frame: Option<FrameCallback>,
 ) {
     let start = Instant::now();
     let mut paused_for = Duration::ZERO;
@@ -247,6 +254,9 @@ fn run(
                 elapsed,
                 state,
             }));
+            if let Some(notify) = &on_frame {
+                notify();
+            }
         };
     let mut image = shared.frame.load().image.clone();
     loop {

@@ -21,6 +21,7 @@ fn render(desc: SceneDescription, passes: u64, size: u32, threads: usize) -> Ima
         threads,
         max_passes: Some(passes),
         time_limit: None,
+        on_frame: None,
     })
     .expect("session starts");
     let frame = session.wait();

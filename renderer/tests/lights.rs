@@ -46,6 +46,7 @@ fn render_mean(desc: SceneDescription, passes: u64) -> (f64, f64) {
         threads: 0,
         max_passes: Some(passes),
         time_limit: None,
+        on_frame: None,
     })
     .unwrap();
     let frame = session.wait();

@@ -19,6 +19,7 @@ fn config(passes: Option<u64>) -> SessionConfig {
         threads: 2,
         max_passes: passes,
         time_limit: None,
+        on_frame: None,
     }
 }
 

@@ -1,0 +1,182 @@
+//! The background side of the viewer: loads scenes on a thread of their own, owns the render
+//! session, and turns setting changes into live parameter updates or restarts. Nothing here
+//! blocks the UI thread: loads report through a channel, sessions publish frames through the
+//! renderer's lock-free frame slot, and a replaced session is cancelled and joined on a
+//! helper thread.
+
+use crate::viewer::settings::ViewerSettings;
+use caustica_renderer::integrators;
+use caustica_renderer::scene::{Scene, SceneError, gltf};
+use caustica_renderer::session::{Frame, FrameCallback, Session, SessionConfig};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+
+pub struct LoadedScene {
+    pub path: PathBuf,
+    pub scene: Arc<Scene>,
+}
+
+/// What happened in the background since the last poll.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ControllerEvent {
+    SceneLoaded(PathBuf),
+    /// The load failed; the message names the file and the problem. The old scene stays.
+    SceneFailed(String),
+}
+
+/// How a parameter change took effect.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParamEffect {
+    Live,
+    Restarted,
+}
+
+pub struct RenderController {
+    pub scene: Option<LoadedScene>,
+    session: Option<Session>,
+    loading: Option<(PathBuf, Receiver<Result<Scene, SceneError>>)>,
+    on_frame: FrameCallback,
+    /// Sessions started so far, so tests and the status line can tell a restart happened.
+    pub sessions_started: u64,
+}
+
+fn drop_in_background(session: Session) {
+    session.cancel();
+    std::thread::spawn(move || drop(session));
+}
+
+impl RenderController {
+    pub fn new(on_frame: FrameCallback) -> Self {
+        RenderController {
+            scene: None,
+            session: None,
+            loading: None,
+            on_frame,
+            sessions_started: 0,
+        }
+    }
+
+    /// Starts loading a scene; the current one keeps rendering until the new one is ready.
+    pub fn open_scene(&mut self, path: PathBuf) {
+        let (tx, rx) = channel();
+        let notify = self.on_frame.clone();
+        let load_path = path.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(gltf::load(&load_path));
+            notify();
+        });
+        self.loading = Some((path, rx));
+    }
+
+    pub fn loading(&self) -> Option<&Path> {
+        self.loading.as_ref().map(|(p, _)| p.as_path())
+    }
+
+    /// Collects finished loads; a loaded scene replaces the current one and starts rendering.
+    pub fn poll(&mut self, settings: &ViewerSettings) -> Vec<ControllerEvent> {
+        let mut events = Vec::new();
+        let Some((path, rx)) = &self.loading else {
+            return events;
+        };
+        match rx.try_recv() {
+            Err(TryRecvError::Empty) => {}
+            Err(TryRecvError::Disconnected) => {
+                events.push(ControllerEvent::SceneFailed(format!(
+                    "{}: the loader stopped unexpectedly",
+                    path.display()
+                )));
+                self.loading = None;
+            }
+            Ok(Err(e)) => {
+                events.push(ControllerEvent::SceneFailed(e.to_string()));
+                self.loading = None;
+            }
+            Ok(Ok(scene)) => {
+                let path = path.clone();
+                self.loading = None;
+                self.scene = Some(LoadedScene {
+                    path: path.clone(),
+                    scene: Arc::new(scene),
+                });
+                match self.restart(settings) {
+                    Ok(()) => events.push(ControllerEvent::SceneLoaded(path)),
+                    Err(e) => events.push(ControllerEvent::SceneFailed(e)),
+                }
+            }
+        }
+        events
+    }
+
+    /// Starts a fresh session of the current scene with `settings`, replacing any running one.
+    pub fn restart(&mut self, settings: &ViewerSettings) -> Result<(), String> {
+        let Some(loaded) = &self.scene else {
+            return Ok(());
+        };
+        if let Some(old) = self.session.take() {
+            drop_in_background(old);
+        }
+        let session = Session::start(SessionConfig {
+            scene: loaded.scene.clone(),
+            integrator: settings.integrator.clone(),
+            params: settings.params.clone(),
+            width: settings.width,
+            height: settings.height,
+            seed: settings.seed,
+            threads: settings.threads,
+            max_passes: None,
+            time_limit: None,
+            on_frame: Some(self.on_frame.clone()),
+        })
+        .map_err(|e| e.to_string())?;
+        self.session = Some(session);
+        self.sessions_started += 1;
+        Ok(())
+    }
+
+    /// Applies a parameter: live parameters change the running session, the others restart it.
+    pub fn set_param(
+        &mut self,
+        settings: &ViewerSettings,
+        name: &str,
+        value: f64,
+    ) -> Result<ParamEffect, String> {
+        let info = integrators::find(&settings.integrator).ok_or("no integrator")?;
+        let spec = info
+            .params
+            .iter()
+            .find(|p| p.name == name)
+            .ok_or_else(|| format!("no parameter {name}"))?;
+        integrators::check_param(spec, value)?;
+        if spec.live
+            && let Some(session) = &mut self.session
+        {
+            session.set_live_param(name, value)?;
+            return Ok(ParamEffect::Live);
+        }
+        self.restart(settings)?;
+        Ok(ParamEffect::Restarted)
+    }
+
+    pub fn session(&self) -> Option<&Session> {
+        self.session.as_ref()
+    }
+
+    pub fn frame(&self) -> Option<Arc<Frame>> {
+        self.session.as_ref().map(Session::frame)
+    }
+
+    pub fn set_paused(&self, paused: bool) {
+        if let Some(s) = &self.session {
+            s.set_paused(paused);
+        }
+    }
+}
+
+impl Drop for RenderController {
+    fn drop(&mut self) {
+        if let Some(s) = self.session.take() {
+            s.cancel();
+        }
+    }
+}

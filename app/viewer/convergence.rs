@@ -1,0 +1,151 @@
+//! Error against a reference as the render converges, measured on a background thread with
+//! the one metric implementation of the renderer (design.md section 3). The UI sends each new
+//! frame; the thread drops all but the newest, so it never falls behind and the UI never waits.
+
+use caustica_renderer::image::{ErrorMetrics, Image, compare, read_exr};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConvergencePoint {
+    pub seconds: f64,
+    pub metrics: ErrorMetrics,
+}
+
+enum Job {
+    LoadReference(PathBuf),
+    Measure {
+        image: Arc<Image>,
+        seconds: f64,
+        run: u64,
+    },
+}
+
+enum Reply {
+    ReferenceLoaded(PathBuf),
+    Failed(String),
+    Point(u64, ConvergencePoint),
+}
+
+pub struct Convergence {
+    jobs: Sender<Job>,
+    replies: Receiver<Reply>,
+    pub reference: Option<PathBuf>,
+    pub points: Vec<ConvergencePoint>,
+    /// Set when the reference could not be loaded or does not match the render.
+    pub problem: Option<String>,
+    run: u64,
+    last_sent: Option<Arc<Image>>,
+}
+
+fn worker(jobs: Receiver<Job>, replies: Sender<Reply>, notify: Arc<dyn Fn() + Send + Sync>) {
+    let mut reference: Option<Image> = None;
+    while let Ok(mut job) = jobs.recv() {
+        // Newest wins: skip measurements that a later one has made stale.
+        loop {
+            match jobs.try_recv() {
+                Ok(next @ Job::Measure { .. }) if matches!(job, Job::Measure { .. }) => job = next,
+                Ok(next) => {
+                    handle(job, &mut reference, &replies);
+                    job = next;
+                }
+                Err(_) => break,
+            }
+        }
+        handle(job, &mut reference, &replies);
+        notify();
+    }
+}
+
+fn handle(job: Job, reference: &mut Option<Image>, replies: &Sender<Reply>) {
+    let reply = match job {
+        Job::LoadReference(path) => match read_exr(&path) {
+            Ok((image, _)) => {
+                *reference = Some(image);
+                Reply::ReferenceLoaded(path)
+            }
+            Err(e) => Reply::Failed(format!("reference: {e}")),
+        },
+        Job::Measure {
+            image,
+            seconds,
+            run,
+        } => match reference.as_ref().map(|r| compare(&image, r)) {
+            None => return,
+            Some(Ok(metrics)) => Reply::Point(run, ConvergencePoint { seconds, metrics }),
+            Some(Err(e)) => Reply::Failed(format!("reference: {e}")),
+        },
+    };
+    let _ = replies.send(reply);
+}
+
+impl Convergence {
+    pub fn new(notify: Arc<dyn Fn() + Send + Sync>) -> Self {
+        let (jobs, job_rx) = channel();
+        let (reply_tx, replies) = channel();
+        std::thread::Builder::new()
+            .name("caustica-convergence".into())
+            .spawn(move || worker(job_rx, reply_tx, notify))
+            .expect("a thread for the convergence plot");
+        Convergence {
+            jobs,
+            replies,
+            reference: None,
+            points: Vec::new(),
+            problem: None,
+            run: 0,
+            last_sent: None,
+        }
+    }
+
+    pub fn load_reference(&mut self, path: PathBuf) {
+        self.points.clear();
+        self.problem = None;
+        let _ = self.jobs.send(Job::LoadReference(path));
+    }
+
+    /// A new render started: its error curve starts afresh.
+    pub fn reset(&mut self) {
+        self.run += 1;
+        self.points.clear();
+        self.last_sent = None;
+    }
+
+    /// Offers the current frame; only new frames are measured.
+    pub fn offer(&mut self, image: &Arc<Image>, seconds: f64) {
+        if self.reference.is_none()
+            || self
+                .last_sent
+                .as_ref()
+                .is_some_and(|l| Arc::ptr_eq(l, image))
+        {
+            return;
+        }
+        self.last_sent = Some(image.clone());
+        let _ = self.jobs.send(Job::Measure {
+            image: image.clone(),
+            seconds,
+            run: self.run,
+        });
+    }
+
+    /// Collects the thread's replies.
+    pub fn poll(&mut self) {
+        loop {
+            match self.replies.try_recv() {
+                Ok(Reply::ReferenceLoaded(path)) => {
+                    self.reference = Some(path);
+                    self.last_sent = None;
+                }
+                Ok(Reply::Failed(e)) => self.problem = Some(e),
+                Ok(Reply::Point(run, p)) if run == self.run && p.seconds > 0.0 => {
+                    self.problem = None;
+                    self.points.push(p);
+                }
+                Ok(Reply::Point(..)) => {}
+                Err(TryRecvError::Empty | TryRecvError::Disconnected) => break,
+            }
+        }
+    }
+}

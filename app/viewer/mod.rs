@@ -1,0 +1,30 @@
+//! The desktop viewer (eframe on wgpu): opens a glTF scene, renders it progressively in the
+//! background, shows the image as it converges, and saves snapshots.
+
+pub mod app;
+pub mod controller;
+pub mod convergence;
+pub mod panels;
+pub mod plots;
+pub mod settings;
+pub mod tonemap;
+pub mod viewport;
+
+pub use app::{Automation, Command, ViewerApp, ViewerOptions};
+
+/// Opens the viewer window and runs until it is closed.
+pub fn run(options: ViewerOptions) -> eframe::Result<()> {
+    let native = eframe::NativeOptions {
+        viewport: eframe::egui::ViewportBuilder::default()
+            .with_title("Caustica")
+            .with_inner_size([1280.0, 800.0])
+            .with_drag_and_drop(true),
+        renderer: eframe::Renderer::Wgpu,
+        ..Default::default()
+    };
+    eframe::run_native(
+        "Caustica",
+        native,
+        Box::new(|cc| Ok(Box::new(ViewerApp::new(cc, options)))),
+    )
+}

@@ -1,0 +1,276 @@
+//! The side panel. It shows the state it is given and returns the user's actions as
+//! commands; it never calls the renderer (egui's and rerun's separation of UI and work).
+
+use crate::viewer::app::Command;
+use crate::viewer::settings::ViewerSettings;
+use caustica_renderer::image::ToneCurve;
+use caustica_renderer::integrators::{self, ParamSpec};
+use caustica_renderer::scene::SceneInfo;
+use caustica_renderer::session::{Frame, RunState};
+use eframe::egui::{self, RichText};
+use std::path::Path;
+
+/// What the panel displays besides the settings.
+pub struct PanelStatus<'a> {
+    pub scene: Option<(&'a Path, &'a SceneInfo)>,
+    pub loading: Option<&'a Path>,
+    pub frame: Option<&'a Frame>,
+    pub resident_bytes: Option<u64>,
+}
+
+/// A numeric control that reports a value once the user is done with it: at once for live
+/// parameters, on release of a drag for those that restart the render.
+fn commit_value(response: &egui::Response, live: bool) -> bool {
+    if live {
+        response.changed()
+    } else {
+        response.drag_stopped() || (response.changed() && !response.dragged())
+    }
+}
+
+fn param_widget(ui: &mut egui::Ui, spec: &ParamSpec, value: f64, out: &mut Vec<Command>) {
+    let mut v = value;
+    let tag = if spec.live { "live" } else { "restarts" };
+    ui.horizontal(|ui| {
+        let slider = egui::Slider::new(&mut v, spec.min..=spec.max)
+            .text(spec.name)
+            .logarithmic(spec.max / spec.min.max(1.0) > 100.0);
+        let slider = if spec.integer {
+            slider.integer()
+        } else {
+            slider
+        };
+        let response = ui
+            .add(slider)
+            .on_hover_text(format!("{}\n({tag})", spec.doc));
+        ui.label(RichText::new(if spec.live { "live" } else { "restarts" }).weak())
+            .on_hover_text(if spec.live {
+                "changes apply to the passes still to come"
+            } else {
+                "changing this restarts the render"
+            });
+        if commit_value(&response, spec.live) && v != value {
+            out.push(Command::SetParam(spec.name.to_string(), v));
+        }
+    });
+}
+
+pub fn side_panel(
+    ui: &mut egui::Ui,
+    settings: &ViewerSettings,
+    status: &PanelStatus,
+) -> Vec<Command> {
+    let mut out = Vec::new();
+    egui::ScrollArea::vertical().show(ui, |ui| {
+        ui.heading("Scene");
+        match (status.scene, status.loading) {
+            (_, Some(loading)) => {
+                ui.horizontal(|ui| {
+                    ui.spinner();
+                    ui.label(format!("loading {}", loading.display()));
+                });
+            }
+            (None, None) => {
+                ui.label("No scene: open a .gltf or .glb, or drop one on the window.");
+            }
+            _ => {}
+        }
+        if let Some((path, info)) = status.scene {
+            ui.label(
+                RichText::new(
+                    path.file_name()
+                        .map(|n| n.to_string_lossy())
+                        .unwrap_or_default(),
+                )
+                .strong(),
+            )
+            .on_hover_text(path.display().to_string());
+            ui.label(format!(
+                "{} triangles, {} lights, loaded in {:.0} ms",
+                info.triangles,
+                info.lights,
+                info.load_time.as_secs_f64() * 1e3
+            ));
+            for w in &info.warnings {
+                ui.label(RichText::new(format!("warning: {w}")).small());
+            }
+        }
+        ui.horizontal(|ui| {
+            if ui.button("Open…").on_hover_text("Ctrl+O").clicked() {
+                out.push(Command::ShowOpenDialog);
+            }
+            if !settings.recent_scenes.is_empty() {
+                ui.menu_button("Recent", |ui| {
+                    for p in &settings.recent_scenes {
+                        if ui.button(p.display().to_string()).clicked() {
+                            out.push(Command::OpenScene(p.clone()));
+                            ui.close();
+                        }
+                    }
+                });
+            }
+        });
+
+        ui.separator();
+        ui.heading("Render");
+        let mut integrator = settings.integrator.clone();
+        egui::ComboBox::from_label("integrator")
+            .selected_text(&integrator)
+            .show_ui(ui, |ui| {
+                for info in integrators::registry() {
+                    ui.selectable_value(&mut integrator, info.name.to_string(), info.title)
+                        .on_hover_text(info.description);
+                }
+            });
+        if integrator != settings.integrator {
+            out.push(Command::SetIntegrator(integrator));
+        }
+        if let Some(info) = integrators::find(&settings.integrator) {
+            for spec in info.params {
+                let value = settings
+                    .params
+                    .get(spec.name)
+                    .copied()
+                    .unwrap_or(spec.default);
+                param_widget(ui, spec, value, &mut out);
+            }
+        }
+        ui.horizontal(|ui| {
+            let (mut w, mut h) = (settings.width, settings.height);
+            let rw = ui
+                .add(egui::DragValue::new(&mut w).range(1..=8192).suffix(" px"))
+                .on_hover_text("width (restarts)");
+            ui.label("×");
+            let rh = ui
+                .add(egui::DragValue::new(&mut h).range(1..=8192).suffix(" px"))
+                .on_hover_text("height (restarts)");
+            ui.label(RichText::new("restarts").weak());
+            if (commit_value(&rw, false) || commit_value(&rh, false))
+                && (w, h) != (settings.width, settings.height)
+            {
+                out.push(Command::SetResolution(w, h));
+            }
+        });
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let mut threads = settings.threads;
+        let r = ui
+            .add(egui::Slider::new(&mut threads, 0..=cores.max(1) * 2).text("threads"))
+            .on_hover_text("worker threads, 0 for one per core (restarts)");
+        if commit_value(&r, false) && threads != settings.threads {
+            out.push(Command::SetThreads(threads));
+        }
+        let mut seed = settings.seed;
+        let r = ui
+            .add(egui::DragValue::new(&mut seed).prefix("seed "))
+            .on_hover_text("random seed (restarts)");
+        if commit_value(&r, false) && seed != settings.seed {
+            out.push(Command::SetSeed(seed));
+        }
+        ui.horizontal(|ui| {
+            let paused = status.frame.is_some_and(|f| f.state == RunState::Paused);
+            if ui
+                .button(if paused { "Resume" } else { "Pause" })
+                .on_hover_text("Space")
+                .clicked()
+            {
+                out.push(Command::TogglePause);
+            }
+            if ui.button("Restart").on_hover_text("R").clicked() {
+                out.push(Command::Restart);
+            }
+        });
+
+        ui.separator();
+        ui.heading("Display");
+        let mut exposure = settings.exposure;
+        if ui
+            .add(egui::Slider::new(&mut exposure, -10.0..=10.0).text("exposure (EV)"))
+            .changed()
+        {
+            out.push(Command::SetExposure(exposure));
+        }
+        let mut curve = settings.tone_curve;
+        egui::ComboBox::from_label("tone curve")
+            .selected_text(curve.name())
+            .show_ui(ui, |ui| {
+                for c in ToneCurve::ALL {
+                    ui.selectable_value(&mut curve, c, c.name());
+                }
+            });
+        if curve != settings.tone_curve {
+            out.push(Command::SetToneCurve(curve));
+        }
+        ui.horizontal(|ui| {
+            if ui.button("Fit").on_hover_text("F").clicked() {
+                out.push(Command::Fit);
+            }
+            if ui.button("1:1").on_hover_text("1").clicked() {
+                out.push(Command::OneToOne);
+            }
+        });
+        ui.horizontal(|ui| {
+            if ui
+                .button("Save EXR")
+                .on_hover_text("Ctrl+S: the linear estimate with its metadata")
+                .clicked()
+            {
+                out.push(Command::SaveExr);
+            }
+            if ui
+                .button("Save PNG")
+                .on_hover_text("what the window shows: exposure and tone curve applied")
+                .clicked()
+            {
+                out.push(Command::SavePng);
+            }
+        });
+        if ui.selectable_label(settings.show_plots, "Plots").clicked() {
+            out.push(Command::TogglePlots);
+        }
+
+        ui.separator();
+        ui.heading("Statistics");
+        statistics(ui, status);
+    });
+    out
+}
+
+fn statistics(ui: &mut egui::Ui, status: &PanelStatus) {
+    egui::Grid::new("statistics").num_columns(2).show(ui, |ui| {
+        if let Some(f) = status.frame {
+            let secs = f.elapsed.as_secs_f64();
+            let pixels = (f.image.width * f.image.height).max(1) as f64;
+            let rows = [
+                ("state", format!("{:?}", f.state)),
+                ("elapsed", format!("{secs:.1} s")),
+                ("passes", f.passes.to_string()),
+                (
+                    "samples per pixel",
+                    format!("{:.0}", f.samples as f64 / pixels),
+                ),
+                (
+                    "rays per second",
+                    format!(
+                        "{:.2} M",
+                        if secs > 0.0 {
+                            f.rays as f64 / secs / 1e6
+                        } else {
+                            0.0
+                        }
+                    ),
+                ),
+                ("dropped samples", f.dropped.to_string()),
+            ];
+            for (k, v) in rows {
+                ui.label(k);
+                ui.label(v);
+                ui.end_row();
+            }
+        }
+        if let Some(bytes) = status.resident_bytes {
+            ui.label("memory in use");
+            ui.label(format!("{:.0} MiB", bytes as f64 / (1024.0 * 1024.0)));
+            ui.end_row();
+        }
+    });
+}

@@ -1,0 +1,83 @@
+//! What the viewer remembers between runs (eframe storage): the render and display settings
+//! and the recent scenes.
+
+use caustica_renderer::image::ToneCurve;
+use caustica_renderer::integrators::{self, ParamValues};
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+pub const STORAGE_KEY: &str = "caustica-viewer";
+const MAX_RECENT: usize = 10;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ViewerSettings {
+    pub integrator: String,
+    /// Values of the current integrator's parameters.
+    pub params: ParamValues,
+    pub width: u32,
+    pub height: u32,
+    /// Worker threads; 0 means one per core.
+    pub threads: usize,
+    pub seed: u64,
+    pub exposure: f32,
+    pub tone_curve: ToneCurve,
+    pub recent_scenes: Vec<PathBuf>,
+    pub show_plots: bool,
+}
+
+impl Default for ViewerSettings {
+    fn default() -> Self {
+        let pt = integrators::registry()[0].name.to_string();
+        ViewerSettings {
+            params: Self::defaults_of(&pt),
+            integrator: pt,
+            width: 640,
+            height: 480,
+            threads: 0,
+            seed: 0,
+            exposure: 0.0,
+            tone_curve: ToneCurve::Linear,
+            recent_scenes: Vec::new(),
+            show_plots: true,
+        }
+    }
+}
+
+impl ViewerSettings {
+    pub fn defaults_of(integrator: &str) -> ParamValues {
+        integrators::find(integrator)
+            .map(|info| {
+                info.params
+                    .iter()
+                    .map(|p| (p.name.to_string(), p.default))
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    /// Repairs settings read from an older or foreign store: unknown integrator, parameters
+    /// out of range, absurd sizes.
+    pub fn sanitized(mut self) -> Self {
+        let Some(info) = integrators::find(&self.integrator) else {
+            return ViewerSettings {
+                recent_scenes: self.recent_scenes,
+                ..Default::default()
+            };
+        };
+        self.params = integrators::resolve_params(info, &self.params)
+            .unwrap_or_else(|_| Self::defaults_of(&self.integrator));
+        self.width = self.width.clamp(1, 16384);
+        self.height = self.height.clamp(1, 16384);
+        if !self.exposure.is_finite() {
+            self.exposure = 0.0;
+        }
+        self
+    }
+
+    pub fn remember_scene(&mut self, path: PathBuf) {
+        self.recent_scenes.retain(|p| p != &path);
+        self.recent_scenes.insert(0, path);
+        self.recent_scenes.truncate(MAX_RECENT);
+    }
+}

@@ -1,0 +1,145 @@
+//! The image view: fit to the panel or a chosen zoom, zoom about the cursor with the wheel,
+//! pan by dragging, and a pixel inspector on hover. The pixels are drawn by the GPU tone
+//! mapper (`tonemap`); the frame is uploaded only when a new one arrived.
+
+use crate::viewer::tonemap::{self, TonemapCallback};
+use caustica_renderer::image::{Image, ToneCurve};
+use eframe::egui::{self, Pos2, Rect, Sense, Vec2};
+use eframe::egui_wgpu;
+use std::sync::Arc;
+use std::time::Duration;
+
+/// The pixel under the cursor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HoveredPixel {
+    pub x: u32,
+    pub y: u32,
+    pub rgb: glam::Vec3,
+}
+
+#[derive(Default)]
+pub struct Viewport {
+    /// Screen points per image pixel; None fits the image to the panel.
+    zoom: Option<f32>,
+    /// Image coordinates at the panel's centre (used when not fitting).
+    center: Vec2,
+    uploaded: Option<Arc<Image>>,
+    /// Duration of the last frame upload (conversion and copy to the GPU).
+    pub last_upload: Option<Duration>,
+    pub uploads: u64,
+}
+
+impl Viewport {
+    pub fn fit(&mut self) {
+        self.zoom = None;
+    }
+
+    /// One image pixel per physical screen pixel.
+    pub fn one_to_one(&mut self, pixels_per_point: f32, image_size: Vec2) {
+        if self.zoom.is_none() {
+            self.center = image_size / 2.0;
+        }
+        self.zoom = Some(1.0 / pixels_per_point);
+    }
+
+    pub fn is_fit(&self) -> bool {
+        self.zoom.is_none()
+    }
+
+    pub fn show(
+        &mut self,
+        ui: &mut egui::Ui,
+        render_state: Option<&egui_wgpu::RenderState>,
+        image: Option<&Arc<Image>>,
+        exposure: f32,
+        curve: ToneCurve,
+    ) -> Option<HoveredPixel> {
+        let rect = ui.available_rect_before_wrap();
+        let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        let Some(image) = image else {
+            return None;
+        };
+        let size = Vec2::new(image.width as f32, image.height as f32);
+        let fit = (rect.width() / size.x)
+            .min(rect.height() / size.y)
+            .max(1e-6);
+        let mut zoom = self.zoom.unwrap_or(fit);
+        if self.zoom.is_none() {
+            self.center = size / 2.0;
+        }
+
+        if let Some(cursor) = response.hover_pos() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                // Zoom about the cursor: the image point under it stays under it.
+                let under = self.center + (cursor - rect.center()) / zoom;
+                let new_zoom = (zoom * (scroll * 0.002).exp()).clamp(fit.min(1.0) * 0.1, 256.0);
+                self.center = under - (cursor - rect.center()) / new_zoom;
+                zoom = new_zoom;
+                self.zoom = Some(zoom);
+            }
+        }
+        if response.dragged() {
+            self.center -= response.drag_delta() / zoom;
+            self.zoom = Some(zoom);
+        }
+
+        if let Some(rs) = render_state
+            && !self
+                .uploaded
+                .as_ref()
+                .is_some_and(|u| Arc::ptr_eq(u, image))
+        {
+            self.last_upload = Some(tonemap::upload(rs, image));
+            self.uploads += 1;
+            self.uploaded = Some(image.clone());
+        }
+
+        let image_rect = Rect::from_min_size(rect.center() - self.center * zoom, size * zoom);
+        let visible = image_rect.intersect(rect);
+        if visible.is_positive() {
+            match render_state {
+                Some(_) => {
+                    let uv = |p: Pos2| ((p - image_rect.min) / image_rect.size()).into();
+                    let callback = TonemapCallback {
+                        uv_min: uv(visible.min),
+                        uv_max: uv(visible.max),
+                        exposure,
+                        curve,
+                    };
+                    ui.painter()
+                        .add(egui_wgpu::Callback::new_paint_callback(visible, callback));
+                }
+                None => {
+                    ui.painter().text(
+                        rect.center(),
+                        egui::Align2::CENTER_CENTER,
+                        "no GPU display",
+                        Default::default(),
+                        ui.visuals().text_color(),
+                    );
+                }
+            }
+        }
+
+        let pos = response.hover_pos()?;
+        let p = self.center + (pos - rect.center()) / zoom;
+        if p.x < 0.0 || p.y < 0.0 || p.x >= size.x || p.y >= size.y {
+            return None;
+        }
+        let (x, y) = (p.x as u32, p.y as u32);
+        let hovered = HoveredPixel {
+            x,
+            y,
+            rgb: image.pixel(x as usize, y as usize),
+        };
+        response.on_hover_ui_at_pointer(|ui| {
+            ui.label(format!("pixel ({x}, {y})"));
+            ui.monospace(format!(
+                "R {:.4}\nG {:.4}\nB {:.4}",
+                hovered.rgb.x, hovered.rgb.y, hovered.rgb.z
+            ));
+        });
+        Some(hovered)
+    }
+}

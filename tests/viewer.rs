@@ -1,0 +1,192 @@
+//! The viewer through egui_kittest, on wgpu (lavapipe or llvmpipe without a GPU): panels
+//! drive the session, live settings do not restart it and restarting ones do, snapshots save
+//! readable EXRs, and a broken scene shows its error while the old scene keeps rendering.
+
+use caustica::viewer::app::Message;
+use caustica::viewer::{Command, ViewerApp, ViewerOptions};
+use caustica_renderer::image::read_exr;
+use caustica_renderer::session::RunState;
+use eframe::egui;
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+fn asset(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(name)
+}
+
+fn harness(scene: Option<PathBuf>) -> Harness<'static, ViewerApp> {
+    Harness::builder()
+        .with_size(egui::vec2(1100.0, 700.0))
+        .wgpu()
+        .build_eframe(move |cc| {
+            let mut app = ViewerApp::new(
+                cc,
+                ViewerOptions {
+                    scene,
+                    ..Default::default()
+                },
+            );
+            // Small renders keep the tests quick.
+            app.apply(Command::SetResolution(96, 72));
+            app
+        })
+}
+
+/// Steps the UI until `done` holds (the renderer works on its own threads meanwhile).
+fn step_until(h: &mut Harness<'static, ViewerApp>, what: &str, done: impl Fn(&ViewerApp) -> bool) {
+    let start = Instant::now();
+    while !done(h.state()) {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "timed out waiting for {what}"
+        );
+        h.step();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+fn rendering(app: &ViewerApp) -> bool {
+    app.controller.frame().is_some_and(|f| f.passes >= 2)
+}
+
+#[test]
+fn the_panel_drives_the_session_live_or_by_restart() {
+    let mut h = harness(Some(asset("cornell-box.gltf")));
+    step_until(&mut h, "the first frames", rendering);
+    let sessions = h.state().controller.sessions_started;
+
+    // Exposure is a display setting: it changes at once and the render goes on.
+    h.query_all_by_label("exposure (EV)")
+        .next()
+        .expect("the exposure slider")
+        .set_value_accesskit(2.0);
+    h.run_steps(2);
+    assert_eq!(h.state().settings.exposure, 2.0);
+    assert_eq!(
+        h.state().controller.sessions_started,
+        sessions,
+        "a live setting restarted the render"
+    );
+
+    // Max depth invalidates the estimate: the session restarts with the new value.
+    let depth = h
+        .query_all_by_label("max_depth")
+        .next()
+        .expect("the max_depth slider");
+    depth.set_value_accesskit(3.0);
+    h.run_steps(2);
+    assert_eq!(
+        h.state().controller.sessions_started,
+        sessions + 1,
+        "max_depth must restart the render"
+    );
+    let params = h.state().controller.session().unwrap().params().clone();
+    assert_eq!(params["max_depth"], 3.0);
+
+    // Space pauses, and pausing holds the pass count.
+    step_until(&mut h, "frames after the restart", rendering);
+    h.key_press(egui::Key::Space);
+    step_until(&mut h, "the pause", |a| {
+        a.controller
+            .frame()
+            .is_some_and(|f| f.state == RunState::Paused)
+    });
+}
+
+#[test]
+fn ctrl_s_saves_a_readable_exr_snapshot_with_metadata() {
+    let dir = std::env::temp_dir().join(format!("caustica-viewer-save-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut h = harness(Some(asset("cornell-box.gltf")));
+    h.state_mut().snapshot_dir = dir.clone();
+    step_until(&mut h, "the first frames", rendering);
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    step_until(&mut h, "the save", |a| {
+        a.messages.iter().any(|m| m.text.starts_with("saved"))
+    });
+    let saved: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(saved.len(), 1, "{saved:?}");
+    let name = saved[0].file_name().unwrap().to_string_lossy().into_owned();
+    assert!(
+        name.starts_with("cornell-box-pt-") && name.ends_with(".exr"),
+        "{name}"
+    );
+    let (image, meta) = read_exr(&saved[0]).unwrap();
+    assert_eq!((image.width, image.height), (96, 72));
+    assert!(image.mean_luminance() > 0.0 && image.count_non_finite() == 0);
+    assert_eq!(meta["integrator"], "pt");
+    assert!(meta["passes"].parse::<u64>().unwrap() >= 2);
+
+    // A save that fails says so, and the render goes on.
+    h.state_mut().snapshot_dir = dir.join("missing/deeper");
+    h.state_mut().apply(Command::SaveExr);
+    step_until(&mut h, "the failed save", |a| {
+        a.messages.last().is_some_and(|m| m.is_error)
+    });
+    assert!(
+        h.state()
+            .messages
+            .last()
+            .unwrap()
+            .text
+            .contains("missing/deeper")
+    );
+    let passes = h.state().controller.frame().unwrap().passes;
+    step_until(&mut h, "more passes", |a| {
+        a.controller.frame().is_some_and(|f| f.passes > passes)
+    });
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_broken_scene_shows_its_error_and_the_old_scene_stays() {
+    let dir = std::env::temp_dir().join(format!("caustica-viewer-broken-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let broken = dir.join("broken.gltf");
+    std::fs::write(&broken, "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [").unwrap();
+    let mut h = harness(Some(asset("cornell-glass.gltf")));
+    step_until(&mut h, "the first frames", rendering);
+    h.state_mut().apply(Command::OpenScene(broken.clone()));
+    step_until(&mut h, "the load to fail", |a| {
+        a.controller.loading().is_none()
+    });
+    let last: &Message = h.state().messages.last().unwrap();
+    assert!(
+        last.is_error && last.text.contains("broken.gltf"),
+        "{last:?}"
+    );
+    let app = h.state();
+    assert!(
+        app.controller
+            .scene
+            .as_ref()
+            .unwrap()
+            .path
+            .ends_with("cornell-glass.gltf")
+    );
+    assert!(
+        !app.settings.recent_scenes.contains(&broken),
+        "a failed scene is not a recent one"
+    );
+    let passes = app.controller.frame().unwrap().passes;
+    step_until(&mut h, "the old scene to keep rendering", |a| {
+        a.controller.frame().is_some_and(|f| f.passes > passes)
+    });
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn empty_viewer_snapshot() {
+    // No scene: what a user sees first. Deterministic, so it can be compared to a snapshot.
+    let mut h = harness(None);
+    h.state_mut().show_process_stats = false;
+    h.run_steps(3);
+    h.snapshot("viewer_empty");
+}
