@@ -227,7 +227,27 @@ fn help_documents_every_option() {
     ] {
         assert!(help.contains(option), "help lacks {option}");
     }
-    let o = caustica(&[]);
+    let o = caustica(&["--help"]);
     assert!(o.status.success());
-    assert!(String::from_utf8_lossy(&o.stdout).contains("render"));
+    let help = String::from_utf8_lossy(&o.stdout);
+    for item in ["render", "[SCENE]", "--reference", "--screenshot"] {
+        assert!(help.contains(item), "top-level help lacks {item}");
+    }
+}
+
+#[test]
+fn the_viewer_without_a_display_fails_clearly() {
+    let o = Command::new(env!("CARGO_BIN_EXE_caustica"))
+        .arg("assets/cornell-box.gltf")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("cannot open the viewer window"),
+        "{}",
+        stderr(&o)
+    );
 }
