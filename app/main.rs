@@ -27,6 +27,12 @@ struct Cli {
     /// Reference image (EXR) for the viewer's convergence plot.
     #[arg(long)]
     reference: Option<PathBuf>,
+    /// Render width in the viewer (otherwise the remembered one).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: Option<u32>,
+    /// Render height in the viewer (otherwise the remembered one).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: Option<u32>,
     /// Save a screenshot of the window to this PNG once the render has been shown for
     /// --screenshot-after seconds, then quit (for scripted runs).
     #[arg(long)]
@@ -43,6 +49,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    let launched = std::time::Instant::now();
     let cli = Cli::parse();
     match cli.command {
         Some(Command::Render(args)) => match render::run(&args) {
@@ -71,6 +78,9 @@ fn main() -> ExitCode {
             let options = ViewerOptions {
                 scene: cli.scene,
                 reference: cli.reference,
+                width: cli.width,
+                height: cli.height,
+                launched: Some(launched),
                 automation,
             };
             match viewer::run(options) {

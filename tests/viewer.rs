@@ -190,3 +190,101 @@ fn empty_viewer_snapshot() {
     h.run_steps(3);
     h.snapshot("viewer_empty");
 }
+
+#[test]
+fn the_convergence_plot_measures_the_render_against_a_reference() {
+    use caustica_renderer::image::write_exr;
+    use caustica_renderer::scene::gltf::load;
+    use caustica_renderer::session::{Session, SessionConfig};
+    use std::sync::Arc;
+    // A reference of the same view: 256 passes of the path tracer at the viewer's size.
+    let dir = std::env::temp_dir().join(format!("caustica-viewer-ref-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let reference = dir.join("reference.exr");
+    let frame = Session::start(SessionConfig {
+        scene: Arc::new(load(&asset("cornell-box.gltf")).unwrap()),
+        integrator: "pt".into(),
+        params: Default::default(),
+        width: 96,
+        height: 72,
+        seed: 1234,
+        threads: 0,
+        max_passes: Some(256),
+        time_limit: None,
+        on_frame: None,
+    })
+    .unwrap()
+    .wait();
+    write_exr(&reference, &frame.image, &Default::default()).unwrap();
+
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1100.0, 700.0))
+        .wgpu()
+        .build_eframe(|cc| {
+            ViewerApp::new(
+                cc,
+                ViewerOptions {
+                    scene: Some(asset("cornell-box.gltf")),
+                    reference: Some(reference.clone()),
+                    width: Some(96),
+                    height: Some(72),
+                    ..Default::default()
+                },
+            )
+        });
+    step_until(&mut h, "error points", |a| a.convergence.points.len() >= 5);
+    let points = h.state().convergence.points.clone();
+    assert!(
+        points
+            .iter()
+            .all(|p| p.metrics.rel_mse.is_finite() && p.seconds > 0.0)
+    );
+    assert!(
+        points.windows(2).all(|w| w[1].seconds >= w[0].seconds),
+        "points in time order"
+    );
+    // Independent estimates of the same image: the mean luminance ratio is near one.
+    let last = points.last().unwrap().metrics;
+    assert!((last.mean_luminance_ratio - 1.0).abs() < 0.1, "{last:?}");
+    // A reference of another size is refused with a message, not a crash.
+    h.state_mut().apply(Command::SetResolution(50, 50));
+    step_until(&mut h, "the size mismatch", |a| {
+        a.convergence
+            .problem
+            .as_deref()
+            .is_some_and(|p| p.contains("reference"))
+    });
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn hovering_the_image_inspects_its_pixel() {
+    let mut h = harness(Some(asset("cornell-box.gltf")));
+    step_until(&mut h, "the first frames", rendering);
+    // Paused, the frame stays put while we compare.
+    h.state_mut().apply(Command::TogglePause);
+    step_until(&mut h, "the pause", |a| {
+        a.controller
+            .frame()
+            .is_some_and(|f| f.state == RunState::Paused)
+    });
+    // The image is fitted into the central panel; its centre is the image's centre.
+    let central = egui::pos2((1100.0 - 300.0) / 2.0, (700.0 - 200.0 - 24.0) / 2.0);
+    let mut found = None;
+    for dy in [-40.0, 0.0, 40.0] {
+        h.hover_at(central + egui::vec2(0.0, dy));
+        h.run_steps(2);
+        if let Some(p) = h.state().hovered {
+            found = Some(p);
+            break;
+        }
+    }
+    let p = found.expect("hovering the image shows a pixel");
+    assert!(p.x < 96 && p.y < 72);
+    let frame = h.state().controller.frame().unwrap();
+    assert_eq!(
+        frame.image.pixel(p.x as usize, p.y as usize),
+        p.rgb,
+        "the inspector shows the pixel under the cursor"
+    );
+}

@@ -53,6 +53,11 @@ enum DialogPurpose {
 pub struct ViewerOptions {
     pub scene: Option<PathBuf>,
     pub reference: Option<PathBuf>,
+    /// When the program started, so the time to the first frame includes opening the window.
+    pub launched: Option<Instant>,
+    /// Render size, overriding the remembered one.
+    pub width: Option<u32>,
+    pub height: Option<u32>,
     /// Scripted run for tests: save a screenshot after some seconds of rendering, then quit.
     pub automation: Option<Automation>,
 }
@@ -128,8 +133,10 @@ impl ViewerApp {
             sessions_seen: 0,
             automation: options.automation,
             screenshot_requested: false,
-            started: Instant::now(),
+            started: options.launched.unwrap_or_else(Instant::now),
         };
+        app.settings.width = options.width.unwrap_or(app.settings.width);
+        app.settings.height = options.height.unwrap_or(app.settings.height);
         if let Some(scene) = options.scene {
             app.apply(Command::OpenScene(scene));
         }
