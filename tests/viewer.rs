@@ -124,6 +124,22 @@ fn ctrl_s_saves_a_readable_exr_snapshot_with_metadata() {
     assert_eq!(meta["integrator"], "pt");
     assert!(meta["passes"].parse::<u64>().unwrap() >= 2);
 
+    // Save PNG writes what the window shows.
+    h.state_mut().apply(Command::SavePng);
+    step_until(&mut h, "the PNG", |a| {
+        a.messages
+            .iter()
+            .filter(|m| m.text.starts_with("saved"))
+            .count()
+            == 2
+    });
+    let png = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|e| e == "png"));
+    let png = image::open(png.expect("a PNG was saved")).unwrap();
+    assert_eq!((png.width(), png.height()), (96, 72));
+
     // A save that fails says so, and the render goes on.
     h.state_mut().snapshot_dir = dir.join("missing/deeper");
     h.state_mut().apply(Command::SaveExr);
@@ -287,4 +303,53 @@ fn hovering_the_image_inspects_its_pixel() {
         p.rgb,
         "the inspector shows the pixel under the cursor"
     );
+}
+
+#[test]
+fn wheel_zooms_about_the_cursor_drag_pans_and_f_fits() {
+    let mut h = harness(Some(asset("cornell-box.gltf")));
+    step_until(&mut h, "the first frames", rendering);
+    let cursor = egui::pos2(420.0, 230.0);
+    h.hover_at(cursor);
+    h.run_steps(2);
+    let before = h.state().hovered.expect("the cursor is over the image");
+    assert!(h.state().viewport.is_fit());
+    for _ in 0..5 {
+        h.event(egui::Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Point,
+            delta: egui::vec2(0.0, 60.0),
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Unknown,
+            modifiers: egui::Modifiers::NONE,
+        });
+        h.run_steps(3);
+    }
+    h.run_steps(10);
+    h.hover_at(cursor);
+    h.run_steps(2);
+    let after = h.state().hovered.expect("still over the image");
+    assert!(!h.state().viewport.is_fit(), "the wheel zoomed in");
+    assert!(
+        before.x.abs_diff(after.x) <= 1 && before.y.abs_diff(after.y) <= 1,
+        "{before:?} moved to {after:?}"
+    );
+
+    // Dragging left by 60 points moves the image under the cursor: a pixel further right.
+    h.drag_at(cursor);
+    h.run_steps(1);
+    h.hover_at(cursor - egui::vec2(60.0, 0.0));
+    h.run_steps(1);
+    h.drop_at(cursor - egui::vec2(60.0, 0.0));
+    h.run_steps(2);
+    h.hover_at(cursor);
+    h.run_steps(2);
+    let panned = h.state().hovered.expect("still over the image");
+    assert!(
+        panned.x > after.x,
+        "dragging left shows pixels further right: {after:?} -> {panned:?}"
+    );
+
+    h.key_press(egui::Key::F);
+    h.run_steps(2);
+    assert!(h.state().viewport.is_fit());
 }

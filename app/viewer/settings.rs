@@ -81,3 +81,38 @@ impl ViewerSettings {
         self.recent_scenes.truncate(MAX_RECENT);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_survive_a_round_trip_and_bad_stores_are_repaired() {
+        let mut s = ViewerSettings {
+            exposure: 1.5,
+            tone_curve: ToneCurve::Filmic,
+            width: 320,
+            ..Default::default()
+        };
+        s.remember_scene(PathBuf::from("a.gltf"));
+        s.remember_scene(PathBuf::from("b.gltf"));
+        s.remember_scene(PathBuf::from("a.gltf"));
+        assert_eq!(
+            s.recent_scenes,
+            vec![PathBuf::from("a.gltf"), PathBuf::from("b.gltf")]
+        );
+        let text = serde_json::to_string(&s).unwrap();
+        let back: ViewerSettings = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, s);
+
+        let mut bad = s.clone();
+        bad.integrator = "gone".into();
+        assert_eq!(bad.sanitized().integrator, "pt");
+        let mut bad = s.clone();
+        bad.params.insert("max_depth".into(), 1e9);
+        bad.exposure = f32::NAN;
+        let fixed = bad.sanitized();
+        assert_eq!(fixed.params["max_depth"], 64.0);
+        assert_eq!(fixed.exposure, 0.0);
+    }
+}
