@@ -507,15 +507,24 @@ impl eframe::App for ViewerApp {
                 .resizable(true)
                 .default_size(200.0)
                 .show(ui, |ui| {
-                    commands.extend(plots::plots_panel(ui, &self.convergence));
+                    let integrator_plots = current
+                        .as_ref()
+                        .map(|f| f.plots.clone())
+                        .unwrap_or_default();
+                    commands.extend(plots::plots_panel(ui, &self.convergence, &integrator_plots));
                 });
         }
         egui::CentralPanel::default().show(ui, |ui| {
             let image = current.as_ref().map(|f| &f.image);
+            let layers = current
+                .as_ref()
+                .map(|f| f.pixel_layers.clone())
+                .unwrap_or_default();
             self.hovered = self.viewport.show(
                 ui,
                 frame.wgpu_render_state(),
                 image,
+                &layers,
                 self.settings.exposure,
                 self.settings.tone_curve,
             );

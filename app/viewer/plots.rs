@@ -3,8 +3,9 @@
 
 use crate::viewer::app::Command;
 use crate::viewer::convergence::Convergence;
+use caustica_renderer::integrators::{PlotKind, PlotSeries};
 use eframe::egui;
-use egui_plot::{Legend, Line, Plot, PlotPoints};
+use egui_plot::{Bar, BarChart, Legend, Line, Plot, PlotPoints};
 
 fn power_of_ten(mark: egui_plot::GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
     let v = 10f64.powf(mark.value);
@@ -18,7 +19,12 @@ fn power_of_ten(mark: egui_plot::GridMark, _range: &std::ops::RangeInclusive<f64
     }
 }
 
-pub fn plots_panel(ui: &mut egui::Ui, convergence: &Convergence) -> Vec<Command> {
+/// The convergence plot, then every plot the integrator offers, side by side.
+pub fn plots_panel(
+    ui: &mut egui::Ui,
+    convergence: &Convergence,
+    integrator_plots: &[PlotSeries],
+) -> Vec<Command> {
     let mut out = Vec::new();
     ui.horizontal(|ui| {
         ui.strong("Convergence");
@@ -43,15 +49,71 @@ pub fn plots_panel(ui: &mut egui::Ui, convergence: &Convergence) -> Vec<Command>
             ));
         }
     });
-    let log_points = |f: fn(&caustica_renderer::image::ErrorMetrics) -> f64| -> PlotPoints {
-        convergence
-            .points
-            .iter()
-            .filter(|p| f(&p.metrics) > 0.0)
-            .map(|p| [p.seconds.log10(), f(&p.metrics).log10()])
-            .collect()
-    };
+    let log_points =
+        |f: fn(&caustica_renderer::image::ErrorMetrics) -> f64| -> PlotPoints<'static> {
+            convergence
+                .points
+                .iter()
+                .filter(|p| f(&p.metrics) > 0.0)
+                .map(|p| [p.seconds.log10(), f(&p.metrics).log10()])
+                .collect()
+        };
+    let mut titles: Vec<&str> = Vec::new();
+    for series in integrator_plots {
+        if !titles.contains(&series.plot.as_str()) {
+            titles.push(&series.plot);
+        }
+    }
+    let columns = 1 + titles.len();
+    let height = ui.available_height().max(80.0);
+    let width = (ui.available_width() - 8.0 * (columns - 1) as f32) / columns as f32;
+    ui.horizontal(|ui| {
+        ui.vertical(|ui| {
+            ui.set_width(width);
+            convergence_plot(ui, height, &log_points);
+        });
+        for title in &titles {
+            ui.vertical(|ui| {
+                ui.set_width(width);
+                ui.strong(*title);
+                integrator_plot(ui, height - 20.0, title, integrator_plots);
+            });
+        }
+    });
+    out
+}
+
+fn integrator_plot(ui: &mut egui::Ui, height: f32, title: &str, all: &[PlotSeries]) {
+    let series: Vec<&PlotSeries> = all.iter().filter(|s| s.plot == title).collect();
+    let Some(first) = series.first() else { return };
+    Plot::new(("integrator plot", title))
+        .height(height)
+        .legend(Legend::default())
+        .x_axis_label(first.x_label.clone())
+        .y_axis_label(first.y_label.clone())
+        .show(ui, |plot| {
+            for s in &series {
+                match s.kind {
+                    PlotKind::Line => plot.line(Line::new(
+                        s.name.clone(),
+                        PlotPoints::from(s.points.clone()),
+                    )),
+                    PlotKind::Bars => {
+                        let bars = s.points.iter().map(|p| Bar::new(p[0], p[1])).collect();
+                        plot.bar_chart(BarChart::new(s.name.clone(), bars));
+                    }
+                }
+            }
+        });
+}
+
+fn convergence_plot(
+    ui: &mut egui::Ui,
+    height: f32,
+    log_points: &dyn Fn(fn(&caustica_renderer::image::ErrorMetrics) -> f64) -> PlotPoints<'static>,
+) {
     Plot::new("convergence")
+        .height(height)
         .legend(Legend::default())
         .x_axis_label("seconds")
         .y_axis_label("error")
@@ -61,5 +123,42 @@ pub fn plots_panel(ui: &mut egui::Ui, convergence: &Convergence) -> Vec<Command>
             plot.line(Line::new("relMSE", log_points(|m| m.rel_mse)));
             plot.line(Line::new("RMSE", log_points(|m| m.rmse)));
         });
-    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use egui_kittest::Harness;
+    use egui_kittest::kittest::Queryable;
+
+    #[test]
+    fn integrator_plots_appear_beside_the_convergence_plot() {
+        let convergence = Convergence::new(std::sync::Arc::new(|| {}));
+        let series = vec![
+            PlotSeries {
+                plot: "Radius".into(),
+                name: "mean".into(),
+                kind: PlotKind::Line,
+                x_label: "passes".into(),
+                y_label: "radius".into(),
+                points: vec![[1.0, 0.1], [2.0, 0.08]],
+            },
+            PlotSeries {
+                plot: "Techniques".into(),
+                name: "k = 3".into(),
+                kind: PlotKind::Bars,
+                x_label: "s".into(),
+                y_label: "share".into(),
+                points: vec![[0.0, 0.5], [1.0, 0.5]],
+            },
+        ];
+        let harness = Harness::builder()
+            .with_size(egui::vec2(900.0, 250.0))
+            .build_ui(|ui| {
+                plots_panel(ui, &convergence, &series);
+            });
+        harness.get_by_label("Radius");
+        harness.get_by_label("Techniques");
+        harness.get_by_label("Convergence");
+    }
 }

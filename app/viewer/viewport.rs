@@ -4,6 +4,7 @@
 
 use crate::viewer::tonemap::{self, TonemapCallback};
 use caustica_renderer::image::{Image, ToneCurve};
+use caustica_renderer::integrators::PixelLayer;
 use eframe::egui::{self, Pos2, Rect, Sense, Vec2};
 use eframe::egui_wgpu;
 use std::sync::Arc;
@@ -51,6 +52,7 @@ impl Viewport {
         ui: &mut egui::Ui,
         render_state: Option<&egui_wgpu::RenderState>,
         image: Option<&Arc<Image>>,
+        layers: &[PixelLayer],
         exposure: f32,
         curve: ToneCurve,
     ) -> Option<HoveredPixel> {
@@ -139,6 +141,12 @@ impl Viewport {
                 "R {:.4}\nG {:.4}\nB {:.4}",
                 hovered.rgb.x, hovered.rgb.y, hovered.rgb.z
             ));
+            let index = y as usize * image.width + x as usize;
+            for layer in layers {
+                if let Some(v) = layer.values.get(index) {
+                    ui.monospace(format!("{} {v:.6}", layer.name));
+                }
+            }
         });
         Some(hovered)
     }

@@ -6,7 +6,9 @@
 
 use crate::camera::PerspectiveCamera;
 use crate::image::Image;
-use crate::integrators::{self, Integrator, ParamValues, RenderContext};
+use crate::integrators::{
+    self, Integrator, ParamValues, PassStats, PixelLayer, PlotSeries, RenderContext,
+};
 use crate::scene::Scene;
 use arc_swap::ArcSwap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -49,6 +51,10 @@ pub enum RunState {
 #[derive(Clone, Debug)]
 pub struct Frame {
     pub image: Arc<Image>,
+    /// Plots the integrator offers (drawn by the viewer beside the convergence plot).
+    pub plots: Arc<Vec<PlotSeries>>,
+    /// Per-pixel statistics of the integrator (shown by the viewer's pixel inspector).
+    pub pixel_layers: Arc<Vec<PixelLayer>>,
     pub passes: u64,
     pub samples: u64,
     pub rays: u64,
@@ -118,6 +124,8 @@ impl Session {
         let shared = Arc::new(Shared {
             frame: ArcSwap::from_pointee(Frame {
                 image: Arc::new(Image::new(w as usize, h as usize)),
+                plots: Arc::new(Vec::new()),
+                pixel_layers: Arc::new(Vec::new()),
                 passes: 0,
                 samples: 0,
                 rays: 0,
@@ -232,6 +240,24 @@ impl Drop for Session {
     }
 }
 
+/// What a frame shows of the integrator's state, shared cheaply between frames.
+#[derive(Clone)]
+struct Estimate {
+    image: Arc<Image>,
+    plots: Arc<Vec<PlotSeries>>,
+    pixel_layers: Arc<Vec<PixelLayer>>,
+}
+
+impl Estimate {
+    fn of(integrator: &dyn Integrator) -> Estimate {
+        Estimate {
+            image: Arc::new(integrator.image()),
+            plots: Arc::new(integrator.plots()),
+            pixel_layers: Arc::new(integrator.pixel_layers()),
+        }
+    }
+}
+
 fn run(
     shared: Arc<Shared>,
     mut integrator: Box<dyn Integrator>,
@@ -242,54 +268,44 @@ fn run(
 ) {
     let start = Instant::now();
     let mut paused_for = Duration::ZERO;
-    let mut totals = (0u64, 0u64, 0u64, 0u64); // passes, samples, rays, dropped
-    let publish =
-        |image: Arc<Image>, totals: (u64, u64, u64, u64), elapsed: Duration, state: RunState| {
-            shared.frame.store(Arc::new(Frame {
-                image,
-                passes: totals.0,
-                samples: totals.1,
-                rays: totals.2,
-                dropped: totals.3,
-                elapsed,
-                state,
-            }));
-            if let Some(notify) = &on_frame {
-                notify();
-            }
-        };
-    let mut image = shared.frame.load().image.clone();
+    let mut totals = PassStats::default();
+    let mut passes = 0u64;
+    let publish = |estimate: &Estimate,
+                   passes: u64,
+                   totals: PassStats,
+                   elapsed: Duration,
+                   state: RunState| {
+        shared.frame.store(Arc::new(Frame {
+            image: estimate.image.clone(),
+            plots: estimate.plots.clone(),
+            pixel_layers: estimate.pixel_layers.clone(),
+            passes,
+            samples: totals.samples,
+            rays: totals.rays,
+            dropped: totals.dropped,
+            elapsed,
+            state,
+        }));
+        if let Some(notify) = &on_frame {
+            notify();
+        }
+    };
+    let mut estimate = Estimate::of(integrator.as_ref());
     loop {
+        let elapsed = start.elapsed() - paused_for;
         if shared.cancel.load(Ordering::Relaxed) {
-            publish(
-                image,
-                totals,
-                start.elapsed() - paused_for,
-                RunState::Cancelled,
-            );
+            publish(&estimate, passes, totals, elapsed, RunState::Cancelled);
             return;
         }
-        if max_passes.is_some_and(|m| totals.0 >= m)
-            || time_limit.is_some_and(|t| start.elapsed() - paused_for >= t)
-        {
-            publish(
-                image,
-                totals,
-                start.elapsed() - paused_for,
-                RunState::Finished,
-            );
+        if max_passes.is_some_and(|m| passes >= m) || time_limit.is_some_and(|t| elapsed >= t) {
+            publish(&estimate, passes, totals, elapsed, RunState::Finished);
             return;
         }
         {
             let mut paused = shared.paused.lock().unwrap_or_else(|e| e.into_inner());
             if *paused {
                 let pause_start = Instant::now();
-                publish(
-                    image.clone(),
-                    totals,
-                    start.elapsed() - paused_for,
-                    RunState::Paused,
-                );
+                publish(&estimate, passes, totals, elapsed, RunState::Paused);
                 while *paused && !shared.cancel.load(Ordering::Relaxed) {
                     paused = shared
                         .resume
@@ -300,26 +316,23 @@ fn run(
                 continue;
             }
         }
-        for (name, value) in std::mem::take(
+        let changes = std::mem::take(
             &mut *shared
                 .live_changes
                 .lock()
                 .unwrap_or_else(|e| e.into_inner()),
-        ) {
+        );
+        for (name, value) in changes {
             integrator.set_live_param(&name, value);
         }
-        let pass = totals.0;
-        match pool.install(|| integrator.render_pass(pass, &shared.cancel)) {
+        match pool.install(|| integrator.render_pass(passes, &shared.cancel)) {
             Ok(stats) => {
-                totals = (
-                    totals.0 + 1,
-                    totals.1 + stats.samples,
-                    totals.2 + stats.rays,
-                    totals.3 + stats.dropped,
-                );
-                image = Arc::new(integrator.image());
+                passes += 1;
+                totals = totals + stats;
+                estimate = Estimate::of(integrator.as_ref());
                 publish(
-                    image.clone(),
+                    &estimate,
+                    passes,
                     totals,
                     start.elapsed() - paused_for,
                     RunState::Running,

@@ -66,6 +66,39 @@ pub trait Integrator: Send {
     fn image(&self) -> Image;
     /// Applies a live parameter; false if the name is not live for this integrator.
     fn set_live_param(&mut self, name: &str, value: f64) -> bool;
+    /// Plots of the integrator's own statistics (radius against passes, technique histograms).
+    fn plots(&self) -> Vec<PlotSeries> {
+        Vec::new()
+    }
+    /// Per-pixel statistics for the pixel inspector (photon count, radius, ...).
+    fn pixel_layers(&self) -> Vec<PixelLayer> {
+        Vec::new()
+    }
+}
+
+/// How a plot series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlotKind {
+    Line,
+    Bars,
+}
+
+/// One series of a plot an integrator offers; series with the same `plot` share axes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlotSeries {
+    pub plot: String,
+    pub name: String,
+    pub kind: PlotKind,
+    pub x_label: String,
+    pub y_label: String,
+    pub points: Vec<[f64; 2]>,
+}
+
+/// A named per-pixel value (row-major, the image's size).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PixelLayer {
+    pub name: String,
+    pub values: Vec<f64>,
 }
 
 pub struct IntegratorInfo {
