@@ -353,3 +353,37 @@ fn wheel_zooms_about_the_cursor_drag_pans_and_f_fits() {
     h.run_steps(2);
     assert!(h.state().viewport.is_fit());
 }
+
+#[derive(Debug)]
+struct DroppedPath(PathBuf);
+
+impl egui::DroppedFile for DroppedPath {
+    fn path(&self) -> &Path {
+        &self.0
+    }
+
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+#[test]
+fn dropping_a_scene_on_the_window_opens_it_and_remembers_it() {
+    let mut h = harness(Some(asset("cornell-box.gltf")));
+    step_until(&mut h, "the first frames", rendering);
+    let glass = asset("cornell-glass.gltf");
+    h.input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(DroppedPath(glass.clone())));
+    step_until(&mut h, "the dropped scene", |a| {
+        a.controller.scene.as_ref().is_some_and(|s| s.path == glass)
+    });
+    step_until(&mut h, "frames of the dropped scene", rendering);
+    let recent = &h.state().settings.recent_scenes;
+    assert_eq!(
+        recent.first(),
+        Some(&glass),
+        "the newest scene comes first in the recent list"
+    );
+    assert!(recent.contains(&asset("cornell-box.gltf")));
+}
