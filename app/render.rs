@@ -19,7 +19,7 @@ pub struct RenderArgs {
     /// Output image: .exr (linear float32 RGB with metadata) or .png (tone-mapped sRGB).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Integrator (pt: path tracer).
+    /// Integrator: pt (path tracer), ppm, sppm or pppm (progressive photon mapping).
     #[arg(long, default_value = "pt")]
     pub integrator: String,
     /// Samples per pixel (one per pass); the default when --time is not given is 16.
@@ -43,6 +43,15 @@ pub struct RenderArgs {
     /// Maximum path depth (bounces).
     #[arg(long)]
     pub max_depth: Option<u32>,
+    /// Photon mapping: share of new photons kept per pass, in (0, 1] (default 2/3).
+    #[arg(long)]
+    pub alpha: Option<f64>,
+    /// Photon mapping: initial gather radius in scene units (default: four pixel footprints).
+    #[arg(long)]
+    pub radius: Option<f64>,
+    /// Photon mapping: photons per pass (default 100000).
+    #[arg(long)]
+    pub photons: Option<u64>,
     /// Exposure in stops applied to PNG output.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
@@ -118,8 +127,16 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         ))
     })?;
     let mut given = ParamValues::new();
-    if let Some(d) = args.max_depth {
-        given.insert("max_depth".into(), d as f64);
+    let flags = [
+        ("max_depth", args.max_depth.map(f64::from)),
+        ("alpha", args.alpha),
+        ("radius", args.radius),
+        ("photons", args.photons.map(|p| p as f64)),
+    ];
+    for (name, value) in flags {
+        if let Some(v) = value {
+            given.insert(name.into(), v);
+        }
     }
     // Each integrator parameter has its flag: max_depth is --max-depth.
     let params = integrators::resolve_params(info, &given).map_err(|e| {

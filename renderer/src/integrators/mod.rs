@@ -3,6 +3,7 @@
 //! the viewer and the EXR header all read that one description (design.md section 7).
 
 pub mod path;
+pub mod ppm;
 
 use crate::camera::PerspectiveCamera;
 use crate::image::Image;
@@ -109,13 +110,36 @@ pub struct IntegratorInfo {
     pub create: fn(RenderContext, &ParamValues) -> Box<dyn Integrator>,
 }
 
-static REGISTRY: &[IntegratorInfo] = &[IntegratorInfo {
-    name: "pt",
-    title: "Path tracer",
-    description: "Unidirectional path tracing with next-event estimation and MIS (reference).",
-    params: path::PathSettings::PARAMS,
-    create: path::create,
-}];
+static REGISTRY: &[IntegratorInfo] = &[
+    IntegratorInfo {
+        name: "pt",
+        title: "Path tracer",
+        description: "Unidirectional path tracing with next-event estimation and MIS (reference).",
+        params: path::PathSettings::PARAMS,
+        create: path::create,
+    },
+    IntegratorInfo {
+        name: "ppm",
+        title: "Progressive photon mapping",
+        description: "Hachisuka et al. 2008: hit points from one eye pass, radii shrinking per hit point.",
+        params: ppm::PhotonMappingSettings::PARAMS,
+        create: ppm::create_ppm,
+    },
+    IntegratorInfo {
+        name: "sppm",
+        title: "Stochastic progressive photon mapping",
+        description: "Hachisuka & Jensen 2009: hit points re-traced every pass, statistics per pixel.",
+        params: ppm::PhotonMappingSettings::PARAMS,
+        create: ppm::create_sppm,
+    },
+    IntegratorInfo {
+        name: "pppm",
+        title: "Probabilistic progressive photon mapping",
+        description: "Knaus & Zwicker 2011: one global radius per pass, independent passes averaged.",
+        params: ppm::PhotonMappingSettings::PARAMS,
+        create: ppm::create_pppm,
+    },
+];
 
 pub fn registry() -> &'static [IntegratorInfo] {
     REGISTRY

@@ -176,7 +176,7 @@ pub fn li(
         let bsdf = scene.bsdf(&si);
         let wo = si.shading.to_local(si.wo);
         if !bsdf.is_delta() {
-            l += beta * sample_direct(scene, &si, &bsdf, wo, sampler, rays);
+            l += beta * sample_direct(scene, &si, &bsdf, wo, sampler, rays, true);
         }
         let uc = sampler.get_1d();
         let u = sampler.get_2d();
@@ -209,13 +209,17 @@ pub fn li(
 
 /// Next-event estimation: one light chosen by power, one point on it, weighted by MIS against
 /// BSDF sampling unless the light is a delta light.
-fn sample_direct(
+///
+/// Without `mis` the estimate stands alone (for integrators that never find emitters by BSDF
+/// sampling, such as the photon mappers' eye pass).
+pub(crate) fn sample_direct(
     scene: &Scene,
     si: &SurfaceInteraction,
     bsdf: &Bsdf,
     wo: Vec3,
     sampler: &mut Sampler,
     rays: &mut u64,
+    mis: bool,
 ) -> Vec3 {
     let ul = sampler.get_1d();
     let u = sampler.get_2d();
@@ -251,7 +255,7 @@ fn sample_direct(
         return Vec3::ZERO;
     }
     let light_pdf = pmf * ls.pdf;
-    if ls.is_delta {
+    if ls.is_delta || !mis {
         return f * ls.l / light_pdf;
     }
     let w = power_heuristic(1.0, light_pdf, 1.0, bsdf.pdf(wo, wi));

@@ -5,6 +5,7 @@
 //! (1 for delta lights); `pdf_li` is the same density for a direction that hit the light.
 
 pub mod area;
+pub mod emission;
 pub mod environment;
 pub mod punctual;
 pub mod sampler;

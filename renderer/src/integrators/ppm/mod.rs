@@ -1,0 +1,564 @@
+//! Progressive photon mapping: PPM (Hachisuka, Ogaki & Jensen 2008), stochastic PPM
+//! (Hachisuka & Jensen 2009) and probabilistic PPM (Knaus & Zwicker 2011), sharing one eye
+//! pass (`hit_points`), one photon tracer and one spatial hash grid (`hash_grid`).
+//!
+//! After every photon pass each hit point with M > 0 new photons is updated by Hachisuka et
+//! al. 2008, eqs. 5-7, in area form (design.md section 4):
+//!
+//! ```text
+//! N' = N + alpha M
+//! R'^2 = R^2 (N + alpha M) / (N + M)
+//! tau' = (tau + tau_M) (N + alpha M) / (N + M)
+//! ```
+//!
+//! and radiance is L = direct_sum / n + tau / (pi R^2 N_emitted). PPPM instead shrinks one
+//! global radius, r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1) (Knaus & Zwicker 2011, eq. 20), and
+//! averages independent photon-map estimates.
+//!
+//! Photon splats are accumulated per worker without locks and merged after the pass; the
+//! merge order is fixed, so a given seed and thread count give the same image, and other
+//! thread counts differ only in the order of floating-point sums (design.md section 6).
+
+pub mod hash_grid;
+pub mod hit_points;
+
+use crate::film::sanitize;
+use crate::geometry::luminance;
+use crate::image::Image;
+use crate::integrators::{
+    Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PixelLayer, PlotKind, PlotSeries,
+    RenderContext,
+};
+use crate::light::emission::sample_le;
+use crate::material::TransportMode;
+use crate::sampling::sampler::Sampler;
+use glam::{DVec3, Vec2, Vec3};
+use hash_grid::HashGrid;
+use hit_points::{HitPoint, trace_eye_path};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// Hit points from the first eye pass, kept for the whole run.
+    Ppm,
+    /// Hit points re-traced every pass with new jitter; statistics per pixel.
+    Sppm,
+    /// One global radius per pass; independent estimates averaged.
+    Pppm,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotonMappingSettings {
+    pub alpha: f64,
+    /// Initial radius in scene units; 0 chooses it automatically (see `auto_radius`).
+    pub radius: f64,
+    pub photons: u64,
+    pub max_depth: u32,
+}
+
+impl PhotonMappingSettings {
+    pub const PARAMS: &'static [ParamSpec] = &[
+        ParamSpec {
+            name: "alpha",
+            doc: "Share of new photons kept per pass (0, 1]: smaller shrinks the radius faster (less bias, more noise); 1 never shrinks it.",
+            default: 2.0 / 3.0,
+            min: 1e-3,
+            max: 1.0,
+            integer: false,
+            live: true,
+        },
+        ParamSpec {
+            name: "radius",
+            doc: "Initial gather radius in scene units; 0 picks four pixel footprints at the scene's distance.",
+            default: 0.0,
+            min: 0.0,
+            max: 1e6,
+            integer: false,
+            live: false,
+        },
+        ParamSpec {
+            name: "photons",
+            doc: "Photons traced per pass.",
+            default: 100_000.0,
+            min: 1.0,
+            max: 1e7,
+            integer: true,
+            live: true,
+        },
+        ParamSpec {
+            name: "max_depth",
+            doc: "Maximum bounces of eye paths (through specular surfaces) and of photon paths; Russian roulette ends most photons earlier.",
+            default: 64.0,
+            min: 1.0,
+            max: 1024.0,
+            integer: true,
+            live: false,
+        },
+    ];
+
+    pub fn from_params(p: &ParamValues) -> Self {
+        let get = |name: &str| {
+            p.get(name).copied().unwrap_or_else(|| {
+                Self::PARAMS
+                    .iter()
+                    .find(|s| s.name == name)
+                    .map_or(0.0, |s| s.default)
+            })
+        };
+        PhotonMappingSettings {
+            alpha: get("alpha"),
+            radius: get("radius"),
+            photons: get("photons") as u64,
+            max_depth: get("max_depth") as u32,
+        }
+    }
+}
+
+/// The automatic initial radius: four pixel footprints at the distance from the camera to the
+/// centre of the scene's bounds (a pixel there is 2 d tan(fov / 2) / height wide).
+pub fn auto_radius(ctx: &RenderContext) -> f64 {
+    let d = (ctx.scene.bounds.center() - ctx.camera.position())
+        .length()
+        .max(1e-6) as f64;
+    let pixel =
+        2.0 * d * (ctx.scene.camera.yfov as f64 / 2.0).tan() / ctx.camera.height.max(1) as f64;
+    4.0 * pixel
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct PixelStats {
+    /// Accumulated photon count N (fractional after the alpha reduction).
+    n: f64,
+    radius_sq: f64,
+    tau: DVec3,
+    direct_sum: DVec3,
+    photons_counted: u64,
+}
+
+pub struct PhotonMapper {
+    ctx: RenderContext,
+    variant: Variant,
+    settings: PhotonMappingSettings,
+    initial_radius_sq: f64,
+    radius_floor_sq: f64,
+    pixels: Vec<PixelStats>,
+    hit_points: Vec<Option<HitPoint>>,
+    /// PPM: emission seen through the fixed eye paths.
+    fixed_emitted: Vec<Vec3>,
+    /// PPPM: the sum of the per-pass images, and the current global radius.
+    pass_sum: Vec<DVec3>,
+    global_radius_sq: f64,
+    photons_emitted: u64,
+    passes: u64,
+    /// (passes, mean radius, standard deviation of the radius), thinned to stay bounded.
+    radius_history: Vec<[f64; 3]>,
+    history_stride: u64,
+}
+
+pub fn create_ppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
+    Box::new(PhotonMapper::new(
+        ctx,
+        Variant::Ppm,
+        PhotonMappingSettings::from_params(p),
+    ))
+}
+
+pub fn create_sppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
+    Box::new(PhotonMapper::new(
+        ctx,
+        Variant::Sppm,
+        PhotonMappingSettings::from_params(p),
+    ))
+}
+
+pub fn create_pppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
+    Box::new(PhotonMapper::new(
+        ctx,
+        Variant::Pppm,
+        PhotonMappingSettings::from_params(p),
+    ))
+}
+
+const PHOTON_STREAM: u64 = 0x5eed_0f_9407_0715;
+const MAX_HISTORY: usize = 2048;
+
+impl PhotonMapper {
+    pub fn new(ctx: RenderContext, variant: Variant, settings: PhotonMappingSettings) -> Self {
+        let pixels = (ctx.camera.width * ctx.camera.height) as usize;
+        let radius = if settings.radius > 0.0 {
+            settings.radius
+        } else {
+            auto_radius(&ctx)
+        };
+        let diagonal = ctx.scene.bounds.diagonal().length().max(1e-12) as f64;
+        let initial_radius_sq = radius * radius;
+        PhotonMapper {
+            variant,
+            settings,
+            initial_radius_sq,
+            // The radius never falls below a millionth of the scene: f32 positions cannot
+            // resolve less, and the grid's cells stay meaningful.
+            radius_floor_sq: (1e-6 * diagonal).powi(2),
+            pixels: vec![
+                PixelStats {
+                    radius_sq: initial_radius_sq,
+                    ..Default::default()
+                };
+                pixels
+            ],
+            hit_points: vec![None; pixels],
+            fixed_emitted: vec![Vec3::ZERO; pixels],
+            pass_sum: vec![DVec3::ZERO; if variant == Variant::Pppm { pixels } else { 0 }],
+            global_radius_sq: initial_radius_sq,
+            photons_emitted: 0,
+            passes: 0,
+            radius_history: Vec::new(),
+            history_stride: 1,
+            ctx,
+        }
+    }
+
+    pub fn initial_radius(&self) -> f64 {
+        self.initial_radius_sq.sqrt()
+    }
+
+    fn radius_sq(&self, pixel: usize) -> f64 {
+        match self.variant {
+            Variant::Pppm => self.global_radius_sq,
+            _ => self.pixels[pixel].radius_sq,
+        }
+    }
+
+    /// Eye pass: new hit points (SPPM, PPPM, and PPM's first pass) and each pixel's direct
+    /// estimate for this pass.
+    fn eye_pass(
+        &mut self,
+        pass: u64,
+        cancel: &AtomicBool,
+        stats: &mut PassStats,
+    ) -> Result<Vec<Vec3>, Cancelled> {
+        let width = self.ctx.camera.width as usize;
+        let (scene, camera, seed, max_depth) = (
+            &*self.ctx.scene,
+            &self.ctx.camera,
+            self.ctx.seed,
+            self.settings.max_depth,
+        );
+        let retrace = self.variant != Variant::Ppm || pass == 0;
+        let mut direct = vec![Vec3::ZERO; self.pixels.len()];
+        let rows: Vec<PassStats> = direct
+            .par_chunks_mut(width)
+            .zip(self.hit_points.par_chunks_mut(width))
+            .zip(self.fixed_emitted.par_chunks_mut(width))
+            .enumerate()
+            .map(|(y, ((direct_row, hp_row), fixed_row))| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Err(Cancelled);
+                }
+                let mut sampler = Sampler::new(seed);
+                let mut row = PassStats::default();
+                for x in 0..width {
+                    let pixel = (y * width + x) as u64;
+                    sampler.start_pixel_sample(pixel, pass);
+                    let emitted = if retrace {
+                        let mut eye = Sampler::new(seed);
+                        eye.start_pixel_sample(
+                            pixel,
+                            if self.variant == Variant::Ppm {
+                                0
+                            } else {
+                                pass
+                            },
+                        );
+                        let film = Vec2::new(x as f32, y as f32) + eye.get_2d();
+                        let path = trace_eye_path(
+                            scene,
+                            camera.generate_ray(film),
+                            &mut eye,
+                            max_depth,
+                            &mut row.rays,
+                        );
+                        hp_row[x] = path.hit_point;
+                        fixed_row[x] = path.emitted;
+                        path.emitted
+                    } else {
+                        fixed_row[x]
+                    };
+                    let nee = hp_row[x].map_or(Vec3::ZERO, |hp| {
+                        hp.direct(scene, &mut sampler, &mut row.rays)
+                    });
+                    direct_row[x] = sanitize(emitted + nee).unwrap_or_else(|| {
+                        row.dropped += 1;
+                        Vec3::ZERO
+                    });
+                    row.samples += 1;
+                }
+                Ok(row)
+            })
+            .collect::<Result<_, _>>()?;
+        for r in rows {
+            *stats = *stats + r;
+        }
+        Ok(direct)
+    }
+
+    /// Photon pass: traces `photons` photons and returns, per pixel, the new photon count M
+    /// and flux sum tau_M (beta f flux, not yet divided by anything).
+    fn photon_pass(
+        &self,
+        pass: u64,
+        cancel: &AtomicBool,
+        stats: &mut PassStats,
+    ) -> Result<(Vec<u32>, Vec<DVec3>), Cancelled> {
+        let grid = HashGrid::build(
+            &self
+                .hit_points
+                .iter()
+                .enumerate()
+                .map(|(i, hp)| hp.map(|h| (h.si.p, self.radius_sq(i).sqrt() as f32)))
+                .collect::<Vec<_>>(),
+        );
+        let photons = self.settings.photons;
+        let chunks = rayon::current_num_threads().max(1) as u64;
+        let n = self.pixels.len();
+        let results: Vec<(Vec<u32>, Vec<DVec3>, PassStats)> = (0..chunks)
+            .into_par_iter()
+            .map(|c| {
+                let mut m = vec![0u32; n];
+                let mut tau = vec![DVec3::ZERO; n];
+                let mut st = PassStats::default();
+                let mut sampler = Sampler::new(self.ctx.seed ^ PHOTON_STREAM);
+                for i in (c * photons / chunks)..((c + 1) * photons / chunks) {
+                    if i % 1024 == 0 && cancel.load(Ordering::Relaxed) {
+                        return Err(Cancelled);
+                    }
+                    sampler.start_pixel_sample(i, pass);
+                    self.trace_photon(&grid, &mut sampler, &mut m, &mut tau, &mut st);
+                }
+                Ok((m, tau, st))
+            })
+            .collect::<Result<_, _>>()?;
+        let mut m = vec![0u32; n];
+        let mut tau = vec![DVec3::ZERO; n];
+        for (cm, ct, st) in results {
+            for i in 0..n {
+                m[i] += cm[i];
+                tau[i] += ct[i];
+            }
+            *stats = *stats + st;
+        }
+        Ok((m, tau))
+    }
+
+    fn trace_photon(
+        &self,
+        grid: &HashGrid,
+        sampler: &mut Sampler,
+        m: &mut [u32],
+        tau: &mut [DVec3],
+        st: &mut PassStats,
+    ) {
+        let scene = &*self.ctx.scene;
+        let Some((light, pmf)) = scene.light_sampler.sample(sampler.get_1d()) else {
+            return;
+        };
+        let (u_pos, u_dir, u_side) = (sampler.get_2d(), sampler.get_2d(), sampler.get_1d());
+        let Some(emitted) = sample_le(scene, &scene.lights[light], u_pos, u_dir, u_side) else {
+            return;
+        };
+        let mut flux = emitted.flux / pmf;
+        let mut ray = emitted.ray;
+        for depth in 0..self.settings.max_depth {
+            st.rays += 1;
+            let Some(si) = scene.intersect(&ray) else {
+                break;
+            };
+            let bsdf = scene.bsdf(&si);
+            // Direct light is next-event estimation's: photons count from their second hit on.
+            if depth > 0 && !bsdf.is_delta() {
+                let wi = -ray.d;
+                for &c in grid.candidates(si.p) {
+                    let c = c as usize;
+                    let Some(hp) = &self.hit_points[c] else {
+                        continue;
+                    };
+                    if ((si.p - hp.si.p).length_squared() as f64) > self.radius_sq(c) {
+                        continue;
+                    }
+                    let r = hp.response(wi);
+                    if r == Vec3::ZERO {
+                        continue;
+                    }
+                    let contribution = (r * flux).as_dvec3();
+                    if contribution.is_finite() && contribution.min_element() >= 0.0 {
+                        m[c] += 1;
+                        tau[c] += contribution;
+                    } else {
+                        st.dropped += 1;
+                    }
+                }
+            }
+            let wo = si.shading.to_local(-ray.d);
+            let (uc, u) = (sampler.get_1d(), sampler.get_2d());
+            let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Importance) else {
+                break;
+            };
+            let new_flux = flux * bs.f * bs.wi.z.abs() / bs.pdf;
+            // Russian roulette on the change of power (pbrt-v4 SPPM, section 13.8.3).
+            let q = (1.0 - luminance(new_flux) / luminance(flux).max(f32::MIN_POSITIVE)).max(0.0);
+            if sampler.get_1d() < q {
+                break;
+            }
+            flux = new_flux / (1.0 - q);
+            if !flux.is_finite() || flux == Vec3::ZERO {
+                break;
+            }
+            ray = si.spawn_ray(si.shading.from_local(bs.wi).normalize());
+        }
+    }
+
+    fn record_radius(&mut self) {
+        let radii: Vec<f64> = (0..self.pixels.len())
+            .filter(|&i| self.hit_points[i].is_some())
+            .map(|i| self.radius_sq(i).sqrt())
+            .collect();
+        if radii.is_empty() || self.passes % self.history_stride != 0 {
+            return;
+        }
+        let mean = radii.iter().sum::<f64>() / radii.len() as f64;
+        let sd =
+            (radii.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / radii.len() as f64).sqrt();
+        self.radius_history.push([self.passes as f64, mean, sd]);
+        if self.radius_history.len() > MAX_HISTORY {
+            // Keep every other point and record half as often: the history stays bounded.
+            self.radius_history = self.radius_history.iter().copied().step_by(2).collect();
+            self.history_stride *= 2;
+        }
+    }
+}
+
+impl Integrator for PhotonMapper {
+    fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
+        let mut stats = PassStats::default();
+        let direct = self.eye_pass(pass, cancel, &mut stats)?;
+        let (m, tau_m) = self.photon_pass(pass, cancel, &mut stats)?;
+        let alpha = self.settings.alpha;
+        let photons = self.settings.photons;
+        match self.variant {
+            Variant::Ppm | Variant::Sppm => {
+                for (i, px) in self.pixels.iter_mut().enumerate() {
+                    px.direct_sum += direct[i].as_dvec3();
+                    if m[i] == 0 {
+                        continue;
+                    }
+                    // Hachisuka et al. 2008, eqs. 5-7.
+                    let (n, mf) = (px.n, m[i] as f64);
+                    let ratio = (n + alpha * mf) / (n + mf);
+                    px.n = n + alpha * mf;
+                    px.radius_sq = (px.radius_sq * ratio).max(self.radius_floor_sq);
+                    px.tau = (px.tau + tau_m[i]) * ratio;
+                    px.photons_counted += m[i] as u64;
+                }
+            }
+            Variant::Pppm => {
+                // Knaus & Zwicker 2011: an independent photon-map estimate with this pass's radius.
+                let area = std::f64::consts::PI * self.global_radius_sq * photons as f64;
+                for (i, sum) in self.pass_sum.iter_mut().enumerate() {
+                    *sum += direct[i].as_dvec3() + tau_m[i] / area;
+                    self.pixels[i].photons_counted += m[i] as u64;
+                }
+                let k = (pass + 1) as f64;
+                self.global_radius_sq =
+                    (self.global_radius_sq * (k + alpha) / (k + 1.0)).max(self.radius_floor_sq);
+            }
+        }
+        self.photons_emitted += photons;
+        self.passes += 1;
+        self.record_radius();
+        Ok(stats)
+    }
+
+    fn image(&self) -> Image {
+        let w = self.ctx.camera.width as usize;
+        let h = self.ctx.camera.height as usize;
+        let n = self.passes.max(1) as f64;
+        let pixels = (0..self.pixels.len())
+            .map(|i| {
+                let l = match self.variant {
+                    Variant::Pppm => self.pass_sum[i] / n,
+                    _ => {
+                        let px = &self.pixels[i];
+                        let indirect = if self.photons_emitted > 0 && px.radius_sq > 0.0 {
+                            px.tau
+                                / (std::f64::consts::PI
+                                    * px.radius_sq
+                                    * self.photons_emitted as f64)
+                        } else {
+                            DVec3::ZERO
+                        };
+                        px.direct_sum / n + indirect
+                    }
+                };
+                if self.passes == 0 {
+                    Vec3::ZERO
+                } else {
+                    sanitize(l.as_vec3()).unwrap_or(Vec3::ZERO)
+                }
+            })
+            .collect();
+        Image {
+            width: w,
+            height: h,
+            pixels,
+        }
+    }
+
+    fn set_live_param(&mut self, name: &str, value: f64) -> bool {
+        match name {
+            "alpha" => self.settings.alpha = value.clamp(1e-3, 1.0),
+            "photons" => self.settings.photons = value.max(1.0) as u64,
+            _ => return false,
+        }
+        true
+    }
+
+    fn plots(&self) -> Vec<PlotSeries> {
+        let series = |name: &str, f: fn(&[f64; 3]) -> f64| PlotSeries {
+            plot: "Radius".into(),
+            name: name.into(),
+            kind: PlotKind::Line,
+            x_label: "passes".into(),
+            y_label: "radius".into(),
+            points: self.radius_history.iter().map(|h| [h[0], f(h)]).collect(),
+        };
+        vec![
+            series("mean", |h| h[1]),
+            series("mean - sd", |h| h[1] - h[2]),
+            series("mean + sd", |h| h[1] + h[2]),
+        ]
+    }
+
+    fn pixel_layers(&self) -> Vec<PixelLayer> {
+        vec![
+            PixelLayer {
+                name: "radius".into(),
+                values: (0..self.pixels.len())
+                    .map(|i| self.radius_sq(i).sqrt())
+                    .collect(),
+            },
+            PixelLayer {
+                name: "N".into(),
+                values: self.pixels.iter().map(|p| p.n).collect(),
+            },
+            PixelLayer {
+                name: "photons".into(),
+                values: self
+                    .pixels
+                    .iter()
+                    .map(|p| p.photons_counted as f64)
+                    .collect(),
+            },
+        ]
+    }
+}
