@@ -183,6 +183,10 @@ pub fn li(
         let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Radiance) else {
             break;
         };
+        let wi = si.shading.from_local(bs.wi).normalize();
+        if !si.consistent(wo, bs.wi, wi) {
+            break;
+        }
         beta *= bs.f * bs.wi.z.abs() / bs.pdf;
         prev_bsdf_pdf = bs.pdf;
         specular_bounce = bs.is_delta;
@@ -190,7 +194,7 @@ pub fn li(
             eta_scale *= bs.eta * bs.eta;
         }
         prev_p = si.p;
-        ray = si.spawn_ray(si.shading.from_local(bs.wi).normalize());
+        ray = si.spawn_ray(wi);
         if !beta.is_finite() || beta == Vec3::ZERO {
             break;
         }
@@ -242,7 +246,7 @@ pub(crate) fn sample_direct(
     }
     let wi = si.shading.to_local(ls.wi);
     let f = bsdf.f(wo, wi, TransportMode::Radiance) * wi.z.abs();
-    if f == Vec3::ZERO {
+    if f == Vec3::ZERO || !si.consistent(wo, wi, ls.wi) {
         return Vec3::ZERO;
     }
     let shadow = if ls.dist.is_finite() {

@@ -147,6 +147,16 @@ impl SurfaceInteraction {
         }
     }
 
+    /// True when the geometric surface agrees with the shading frame on whether the local pair
+    /// (wo, wi) is a reflection or a transmission. Interpolated or mapped normals can claim a
+    /// reflection for a direction that crosses the real surface, which lets light leak through
+    /// closed objects; such pairs are discarded (Veach's thesis, section 5.3).
+    pub fn consistent(&self, wo_local: Vec3, wi_local: Vec3, wi: Vec3) -> bool {
+        let geometric_reflection = (wi.dot(self.n) > 0.0) == (self.wo.dot(self.n) > 0.0);
+        let shading_reflection = wo_local.z * wi_local.z > 0.0;
+        geometric_reflection == shading_reflection
+    }
+
     pub fn light_context(&self) -> LightSampleContext {
         LightSampleContext {
             p: self.p,

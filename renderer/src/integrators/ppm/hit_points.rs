@@ -87,11 +87,15 @@ pub fn trace_eye_path(
         let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Radiance) else {
             break;
         };
+        let wi = si.shading.from_local(bs.wi).normalize();
+        if !si.consistent(wo, bs.wi, wi) {
+            break;
+        }
         beta *= bs.f * bs.wi.z.abs() / bs.pdf;
         if !beta.is_finite() || beta == Vec3::ZERO {
             break;
         }
-        ray = si.spawn_ray(si.shading.from_local(bs.wi).normalize());
+        ray = si.spawn_ray(wi);
     }
     EyePath {
         emitted,

@@ -181,6 +181,9 @@ pub fn create_pppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
 }
 
 const PHOTON_STREAM: u64 = 0x5eed_0f_9407_0715;
+/// Eye paths draw from their own stream, so that next-event estimation at the hit point
+/// (keyed by pixel and pass too) is independent of the jitter and the specular choices.
+const EYE_STREAM: u64 = 0x0e7e_0a7b_5eed_0001;
 const MAX_HISTORY: usize = 2048;
 
 impl PhotonMapper {
@@ -262,7 +265,7 @@ impl PhotonMapper {
                     let pixel = (y * width + x) as u64;
                     sampler.start_pixel_sample(pixel, pass);
                     let emitted = if retrace {
-                        let mut eye = Sampler::new(seed);
+                        let mut eye = Sampler::new(seed ^ EYE_STREAM);
                         eye.start_pixel_sample(
                             pixel,
                             if self.variant == Variant::Ppm {
@@ -404,6 +407,10 @@ impl PhotonMapper {
             let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Importance) else {
                 break;
             };
+            let wi = si.shading.from_local(bs.wi).normalize();
+            if !si.consistent(wo, bs.wi, wi) {
+                break;
+            }
             let new_flux = flux * bs.f * bs.wi.z.abs() / bs.pdf;
             // Russian roulette on the change of power (pbrt-v4 SPPM, section 13.8.3).
             let q = (1.0 - luminance(new_flux) / luminance(flux).max(f32::MIN_POSITIVE)).max(0.0);
@@ -414,7 +421,7 @@ impl PhotonMapper {
             if !flux.is_finite() || flux == Vec3::ZERO {
                 break;
             }
-            ray = si.spawn_ray(si.shading.from_local(bs.wi).normalize());
+            ray = si.spawn_ray(wi);
         }
     }
 
