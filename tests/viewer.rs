@@ -387,3 +387,48 @@ fn dropping_a_scene_on_the_window_opens_it_and_remembers_it() {
     );
     assert!(recent.contains(&asset("cornell-box.gltf")));
 }
+
+#[test]
+fn photon_mapping_in_the_viewer_with_live_alpha_radius_plot_and_inspector() {
+    let mut h = harness(Some(asset("cornell-glass.gltf")));
+    step_until(&mut h, "the first frames", rendering);
+    let sessions = h.state().controller.sessions_started;
+    h.state_mut().apply(Command::SetIntegrator("sppm".into()));
+    assert_eq!(
+        h.state().controller.sessions_started,
+        sessions + 1,
+        "changing the integrator restarts"
+    );
+    h.state_mut()
+        .apply(Command::SetParam("photons".into(), 5000.0));
+    step_until(&mut h, "photon-mapping frames", rendering);
+    let sessions = h.state().controller.sessions_started;
+
+    // alpha is live: the slider changes the running session's parameter without a restart.
+    h.query_all_by_label("alpha")
+        .next()
+        .expect("the alpha slider")
+        .set_value_accesskit(0.5);
+    h.run_steps(2);
+    assert_eq!(
+        h.state().controller.sessions_started,
+        sessions,
+        "alpha must not restart the render"
+    );
+    assert_eq!(
+        h.state().controller.session().unwrap().params()["alpha"],
+        0.5
+    );
+
+    // The integrator's radius plot and per-pixel statistics travel with the frames.
+    let frame = h.state().controller.frame().unwrap();
+    assert!(
+        frame
+            .plots
+            .iter()
+            .any(|p| p.plot == "Radius" && !p.points.is_empty())
+    );
+    let names: Vec<&str> = frame.pixel_layers.iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(names, ["radius", "N", "photons"]);
+    h.get_by_label("Radius");
+}

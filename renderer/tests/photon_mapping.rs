@@ -197,3 +197,60 @@ fn photon_mappers_agree_with_the_path_tracer_on_cornell_glass() {
         );
     }
 }
+
+/// A million passes of one photon on a one-pixel image: the radius keeps its floor, counts
+/// stay exact (u64), the statistics and the radius history stay bounded, the image finite.
+#[test]
+fn a_million_passes_keep_the_radius_floor_and_exact_counts() {
+    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
+    use caustica_renderer::integrators::{Integrator, RenderContext};
+    use std::sync::atomic::AtomicBool;
+    let scene = Arc::new(Scene::build(sphere_with_point_light(16)).unwrap());
+    let camera = PerspectiveCamera::new(&scene.camera, 1, 1);
+    let settings = PhotonMappingSettings {
+        alpha: 0.01,
+        radius: 0.5,
+        photons: 1,
+        max_depth: 8,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let cancel = AtomicBool::new(false);
+    for variant in [Variant::Sppm, Variant::Pppm] {
+        let mut pm = PhotonMapper::new(
+            RenderContext {
+                scene: scene.clone(),
+                camera,
+                seed: 1,
+            },
+            variant,
+            settings,
+        );
+        let passes = if variant == Variant::Sppm {
+            1_000_000
+        } else {
+            100_000
+        };
+        pool.install(|| {
+            for pass in 0..passes {
+                pm.render_pass(pass, &cancel).unwrap();
+            }
+        });
+        assert_eq!(pm.photons_emitted(), passes, "{variant:?}");
+        assert!(
+            pm.radius(0) >= pm.radius_floor() && pm.radius(0) < 0.5,
+            "{variant:?}: radius {}",
+            pm.radius(0)
+        );
+        assert!(
+            pm.radius_history_len() <= 2048,
+            "{variant:?}: history of {}",
+            pm.radius_history_len()
+        );
+        let l = pm.image().pixels[0];
+        assert!(l.is_finite() && l.min_element() >= 0.0, "{variant:?}: {l}");
+    }
+}

@@ -226,6 +226,24 @@ impl PhotonMapper {
         self.initial_radius_sq.sqrt()
     }
 
+    /// The smallest radius allowed (a millionth of the scene's diagonal).
+    pub fn radius_floor(&self) -> f64 {
+        self.radius_floor_sq.sqrt()
+    }
+
+    /// Current gather radius of a pixel's hit point.
+    pub fn radius(&self, pixel: usize) -> f64 {
+        self.radius_sq(pixel).sqrt()
+    }
+
+    pub fn photons_emitted(&self) -> u64 {
+        self.photons_emitted
+    }
+
+    pub fn radius_history_len(&self) -> usize {
+        self.radius_history.len()
+    }
+
     fn radius_sq(&self, pixel: usize) -> f64 {
         match self.variant {
             Variant::Pppm => self.global_radius_sq,
