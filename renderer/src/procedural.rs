@@ -361,5 +361,158 @@ pub fn bundled_assets() -> Vec<(&'static str, String)> {
     vec![
         ("cornell-box.gltf", to_gltf_string(&cornell_box(false))),
         ("cornell-glass.gltf", to_gltf_string(&cornell_box(true))),
+        ("caustic-pool.gltf", to_gltf_string(&caustic_pool())),
     ]
+}
+
+/// A slab of rippled glass: the top is a height field y = top + ripple(x, z) with smooth
+/// normals, the bottom a plane at `bottom`, the sides closed, over [-half, half]^2 in x and z.
+fn rippled_slab(name: &str, half: f32, bottom: f32, top: f32, n: u32, material: u32) -> MeshDesc {
+    let ripple = |x: f32, z: f32| {
+        0.045 * (4.0 * x).sin() * (5.0 * z).cos() + 0.02 * (9.0 * x + 3.0 * z).sin()
+    };
+    let slope = |x: f32, z: f32| {
+        let dx = 0.045 * 4.0 * (4.0 * x).cos() * (5.0 * z).cos()
+            + 0.02 * 9.0 * (9.0 * x + 3.0 * z).cos();
+        let dz = -0.045 * 5.0 * (4.0 * x).sin() * (5.0 * z).sin()
+            + 0.02 * 3.0 * (9.0 * x + 3.0 * z).cos();
+        Vec3::new(-dx, 1.0, -dz).normalize()
+    };
+    let mut mesh = MeshDesc {
+        name: name.into(),
+        material,
+        ..Default::default()
+    };
+    let mut normals = Vec::new();
+    let coord = |i: u32| -half + 2.0 * half * i as f32 / n as f32;
+    // Top height field, counter-clockwise seen from above.
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, z) = (coord(i), coord(j));
+            mesh.positions.push(Vec3::new(x, top + ripple(x, z), z));
+            normals.push(slope(x, z));
+        }
+    }
+    let row = n + 1;
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b, c, d) = (
+                j * row + i,
+                j * row + i + 1,
+                (j + 1) * row + i + 1,
+                (j + 1) * row + i,
+            );
+            mesh.indices.extend_from_slice(&[a, d, c, a, c, b]);
+        }
+    }
+    // Bottom and sides, flat-shaded: their vertices carry their face normal.
+    let mut face = |p: [Vec3; 4], normal: Vec3| {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend_from_slice(&p);
+        normals.extend_from_slice(&[normal; 4]);
+        mesh.indices
+            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    };
+    let h = half;
+    face(
+        [
+            Vec3::new(-h, bottom, -h),
+            Vec3::new(h, bottom, -h),
+            Vec3::new(h, bottom, h),
+            Vec3::new(-h, bottom, h),
+        ],
+        Vec3::NEG_Y,
+    );
+    for i in 0..n {
+        let (x0, x1) = (coord(i), coord(i + 1));
+        let top_at = |x: f32, z: f32| Vec3::new(x, top + ripple(x, z), z);
+        // Front (+z) and back (-z) strips.
+        face(
+            [
+                Vec3::new(x0, bottom, h),
+                Vec3::new(x1, bottom, h),
+                top_at(x1, h),
+                top_at(x0, h),
+            ],
+            Vec3::Z,
+        );
+        face(
+            [
+                Vec3::new(x1, bottom, -h),
+                Vec3::new(x0, bottom, -h),
+                top_at(x0, -h),
+                top_at(x1, -h),
+            ],
+            Vec3::NEG_Z,
+        );
+        // Right (+x) and left (-x) strips.
+        face(
+            [
+                Vec3::new(h, bottom, x1),
+                Vec3::new(h, bottom, x0),
+                top_at(h, x0),
+                top_at(h, x1),
+            ],
+            Vec3::X,
+        );
+        face(
+            [
+                Vec3::new(-h, bottom, x0),
+                Vec3::new(-h, bottom, x1),
+                top_at(-h, x1),
+                top_at(-h, x0),
+            ],
+            Vec3::NEG_X,
+        );
+    }
+    mesh.normals = Some(normals);
+    mesh
+}
+
+/// Light reaching the camera mostly through specular surfaces: a small, bright light above a
+/// slab of rippled glass over a diffuse floor, which the glass covers with caustics.
+pub fn caustic_pool() -> SceneDescription {
+    let floor = Material {
+        name: "floor".into(),
+        ..Material::diffuse(Vec3::new(0.8, 0.78, 0.72))
+    };
+    let glass = Material {
+        name: "rippled glass".into(),
+        metallic: 0.0,
+        roughness: 0.0,
+        transmission: 1.0,
+        ior: 1.5,
+        ..Default::default()
+    };
+    let light = Material {
+        name: "light".into(),
+        emission: Vec3::new(60.0, 55.0, 45.0),
+        ..Material::diffuse(Vec3::ZERO)
+    };
+    let v = Vec3::new;
+    let s = 3.0;
+    SceneDescription {
+        name: "caustic-pool".into(),
+        meshes: vec![
+            quad(
+                "floor",
+                [v(-s, 0., s), v(s, 0., s), v(s, 0., -s), v(-s, 0., -s)],
+                0,
+            ),
+            rippled_slab("glass", 1.2, 0.35, 0.6, 64, 1),
+            quad(
+                "light",
+                [
+                    v(-0.15, 2.6, -0.15),
+                    v(0.15, 2.6, -0.15),
+                    v(0.15, 2.6, 0.15),
+                    v(-0.15, 2.6, 0.15),
+                ],
+                2,
+            ),
+        ],
+        materials: vec![floor, glass, light],
+        camera: Some(camera_looking(v(0.0, 2.4, 3.4), v(0.0, 0.2, 0.0), 45.0)),
+        ..Default::default()
+    }
 }
