@@ -171,11 +171,51 @@ fn bench_cancel(c: &mut Criterion) {
     group.finish();
 }
 
+/// Photon-mapping passes (SPPM, 100,000 photons, cornell-glass at 256 x 256): photons per
+/// second including the eye pass, the grid build and the update.
+fn bench_photon_mapping(c: &mut Criterion) {
+    use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
+    let scene = scene();
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    for threads in [1, all] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let ctx = RenderContext {
+            scene: scene.clone(),
+            camera: PerspectiveCamera::new(&scene.camera, SIZE, SIZE),
+            seed: 0,
+        };
+        let settings = PhotonMappingSettings {
+            alpha: 2.0 / 3.0,
+            radius: 0.0,
+            photons: 100_000,
+            max_depth: 64,
+        };
+        let mut integrator = PhotonMapper::new(ctx, Variant::Sppm, settings);
+        let cancel = AtomicBool::new(false);
+        let mut group = c.benchmark_group(format!("sppm pass, {threads} thread(s)"));
+        group.throughput(Throughput::Elements(settings.photons));
+        group.sample_size(10);
+        let mut pass = 0;
+        group.bench_function("photons", |b| {
+            b.iter(|| {
+                pass += 1;
+                pool.install(|| integrator.render_pass(pass, &cancel))
+                    .unwrap()
+            })
+        });
+        group.finish();
+    }
+}
+
 criterion_group!(
     benches,
     bench_rays,
     bench_path_tracer,
     bench_load,
-    bench_cancel
+    bench_cancel,
+    bench_photon_mapping
 );
 criterion_main!(benches);
