@@ -415,3 +415,49 @@ fn photons_behind_a_thin_wall_are_ignored_and_a_lit_plane_is_exact() {
         );
     }
 }
+
+/// PPM keeps its hit points, so its grid is rebuilt only as the radii shrink; SPPM's and
+/// PPPM's hit points move every pass, so theirs is rebuilt every pass.
+#[test]
+fn the_grid_is_rebuilt_only_when_hit_points_or_radii_require_it() {
+    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
+    use caustica_renderer::integrators::{Integrator, RenderContext};
+    use std::sync::atomic::AtomicBool;
+    let scene = Arc::new(Scene::build(sphere_with_point_light(32)).unwrap());
+    let camera = PerspectiveCamera::new(&scene.camera, 16, 16);
+    let settings = PhotonMappingSettings {
+        alpha: 2.0 / 3.0,
+        radius: 0.2,
+        photons: 2000,
+        max_depth: 64,
+    };
+    let cancel = AtomicBool::new(false);
+    for (variant, expect_all) in [
+        (Variant::Ppm, false),
+        (Variant::Sppm, true),
+        (Variant::Pppm, true),
+    ] {
+        let mut pm = PhotonMapper::new(
+            RenderContext {
+                scene: scene.clone(),
+                camera,
+                seed: 2,
+            },
+            variant,
+            settings,
+        );
+        for pass in 0..40 {
+            pm.render_pass(pass, &cancel).unwrap();
+        }
+        let builds = pm.grid_builds();
+        if expect_all {
+            assert_eq!(builds, 40, "{variant:?}");
+        } else {
+            assert!(
+                builds >= 1 && builds <= 10,
+                "{variant:?}: {builds} builds in 40 passes"
+            );
+        }
+    }
+}

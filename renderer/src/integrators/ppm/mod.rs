@@ -154,6 +154,9 @@ pub struct PhotonMapper {
     /// (passes, mean radius, standard deviation of the radius), thinned to stay bounded.
     radius_history: Vec<[f64; 3]>,
     history_stride: u64,
+    /// The grid over the hit points, and the mean radius it was built for.
+    grid: Option<(HashGrid, f64)>,
+    grid_builds: u64,
 }
 
 pub fn create_ppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
@@ -218,6 +221,8 @@ impl PhotonMapper {
             passes: 0,
             radius_history: Vec::new(),
             history_stride: 1,
+            grid: None,
+            grid_builds: 0,
             ctx,
         }
     }
@@ -242,6 +247,51 @@ impl PhotonMapper {
 
     pub fn radius_history_len(&self) -> usize {
         self.radius_history.len()
+    }
+
+    /// How many times the hash grid was built so far.
+    pub fn grid_builds(&self) -> u64 {
+        self.grid_builds
+    }
+
+    /// Rebuilds the hash grid when the hit points moved (SPPM, PPPM: every pass) or PPM's
+    /// radii have shrunk to half of those it was built for. Radii only shrink, so a grid built
+    /// for larger discs still finds every candidate; it only gets less selective.
+    fn update_grid(&mut self, pass: u64) {
+        let radii: Vec<f64> = (0..self.pixels.len())
+            .map(|i| self.radius_sq(i).sqrt())
+            .collect();
+        let live = self
+            .hit_points
+            .iter()
+            .filter(|h| h.is_some())
+            .count()
+            .max(1);
+        let mean = self
+            .hit_points
+            .iter()
+            .zip(&radii)
+            .filter(|(h, _)| h.is_some())
+            .map(|(_, r)| r)
+            .sum::<f64>()
+            / live as f64;
+        let reusable = self.variant == Variant::Ppm
+            && pass > 0
+            && self
+                .grid
+                .as_ref()
+                .is_some_and(|(_, built)| mean >= 0.5 * built);
+        if reusable {
+            return;
+        }
+        let points: Vec<Option<(Vec3, f32)>> = self
+            .hit_points
+            .iter()
+            .zip(&radii)
+            .map(|(hp, r)| hp.map(|h| (h.si.p, *r as f32)))
+            .collect();
+        self.grid = Some((HashGrid::build(&points), mean));
+        self.grid_builds += 1;
     }
 
     fn radius_sq(&self, pixel: usize) -> f64 {
@@ -332,14 +382,12 @@ impl PhotonMapper {
         cancel: &AtomicBool,
         stats: &mut PassStats,
     ) -> Result<(Vec<u32>, Vec<DVec3>), Cancelled> {
-        let grid = HashGrid::build(
-            &self
-                .hit_points
-                .iter()
-                .enumerate()
-                .map(|(i, hp)| hp.map(|h| (h.si.p, self.radius_sq(i).sqrt() as f32)))
-                .collect::<Vec<_>>(),
-        );
+        let Some((grid, _)) = &self.grid else {
+            return Ok((
+                vec![0; self.pixels.len()],
+                vec![DVec3::ZERO; self.pixels.len()],
+            ));
+        };
         let photons = self.settings.photons;
         let chunks = rayon::current_num_threads().max(1) as u64;
         let n = self.pixels.len();
@@ -360,14 +408,20 @@ impl PhotonMapper {
                 Ok((m, tau, st))
             })
             .collect::<Result<_, _>>()?;
+        // Merge in chunk order, in parallel over pixels: the sums do not depend on scheduling.
         let mut m = vec![0u32; n];
         let mut tau = vec![DVec3::ZERO; n];
-        for (cm, ct, st) in results {
-            for i in 0..n {
-                m[i] += cm[i];
-                tau[i] += ct[i];
-            }
-            *stats = *stats + st;
+        m.par_iter_mut()
+            .zip(tau.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, (mi, ti))| {
+                for (cm, ct, _) in &results {
+                    *mi += cm[i];
+                    *ti += ct[i];
+                }
+            });
+        for (_, _, st) in &results {
+            *stats = *stats + *st;
         }
         Ok((m, tau))
     }
@@ -467,6 +521,7 @@ impl Integrator for PhotonMapper {
     fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let mut stats = PassStats::default();
         let direct = self.eye_pass(pass, cancel, &mut stats)?;
+        self.update_grid(pass);
         let (m, tau_m) = self.photon_pass(pass, cancel, &mut stats)?;
         let alpha = self.settings.alpha;
         let photons = self.settings.photons;
