@@ -27,6 +27,9 @@ struct Cli {
     /// Reference image (EXR) for the viewer's convergence plot.
     #[arg(long)]
     reference: Option<PathBuf>,
+    /// Integrator in the viewer (otherwise the remembered one): pt, ppm, sppm or pppm.
+    #[arg(long)]
+    integrator: Option<String>,
     /// Render width in the viewer (otherwise the remembered one).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     width: Option<u32>,
@@ -78,6 +81,7 @@ fn main() -> ExitCode {
             let options = ViewerOptions {
                 scene: cli.scene,
                 reference: cli.reference,
+                integrator: cli.integrator,
                 width: cli.width,
                 height: cli.height,
                 launched: Some(launched),

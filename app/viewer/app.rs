@@ -55,6 +55,8 @@ pub struct ViewerOptions {
     pub reference: Option<PathBuf>,
     /// When the program started, so the time to the first frame includes opening the window.
     pub launched: Option<Instant>,
+    /// Integrator, overriding the remembered one.
+    pub integrator: Option<String>,
     /// Render size, overriding the remembered one.
     pub width: Option<u32>,
     pub height: Option<u32>,
@@ -135,6 +137,12 @@ impl ViewerApp {
             screenshot_requested: false,
             started: options.launched.unwrap_or_else(Instant::now),
         };
+        if let Some(name) = options.integrator {
+            app.apply(Command::SetIntegrator(name.clone()));
+            if app.settings.integrator != name {
+                app.error(format!("unknown integrator '{name}'"));
+            }
+        }
         app.settings.width = options.width.unwrap_or(app.settings.width);
         app.settings.height = options.height.unwrap_or(app.settings.height);
         if let Some(scene) = options.scene {
