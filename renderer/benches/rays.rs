@@ -97,27 +97,27 @@ fn bench_rays(c: &mut Criterion) {
     }
 }
 
-fn bench_path_tracer(c: &mut Criterion) {
-    let scene = scene();
+/// Times whole passes of an integrator on one thread and on all cores; throughput in
+/// `elements` (samples or photons) per pass.
+fn bench_passes(
+    c: &mut Criterion,
+    name: &str,
+    elements: u64,
+    make: impl Fn() -> Box<dyn Integrator>,
+) {
     let all = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let size = 64;
     for threads in [1, all] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
-        let ctx = RenderContext {
-            scene: scene.clone(),
-            camera: PerspectiveCamera::new(&scene.camera, size, size),
-            seed: 0,
-        };
-        let mut integrator = PathIntegrator::new(ctx, PathSettings::default());
+        let mut integrator = make();
         let cancel = AtomicBool::new(false);
-        let mut group = c.benchmark_group(format!("path tracer, {threads} thread(s)"));
-        group.throughput(Throughput::Elements((size * size) as u64));
-        group.sample_size(20);
+        let mut group = c.benchmark_group(format!("{name}, {threads} thread(s)"));
+        group.throughput(Throughput::Elements(elements));
+        group.sample_size(10);
         let mut pass = 0;
-        group.bench_function("samples", |b| {
+        group.bench_function("pass", |b| {
             b.iter(|| {
                 pass += 1;
                 pool.install(|| integrator.render_pass(pass, &cancel))
@@ -126,6 +126,20 @@ fn bench_path_tracer(c: &mut Criterion) {
         });
         group.finish();
     }
+}
+
+/// Path-tracer samples per second (cornell-glass, 64 x 64, max depth 64).
+fn bench_path_tracer(c: &mut Criterion) {
+    let scene = scene();
+    let size = 64;
+    bench_passes(c, "path tracer samples", (size * size) as u64, || {
+        let ctx = RenderContext {
+            scene: scene.clone(),
+            camera: PerspectiveCamera::new(&scene.camera, size, size),
+            seed: 0,
+        };
+        Box::new(PathIntegrator::new(ctx, PathSettings::default()))
+    });
 }
 
 fn bench_load(c: &mut Criterion) {
@@ -176,38 +190,20 @@ fn bench_cancel(c: &mut Criterion) {
 fn bench_photon_mapping(c: &mut Criterion) {
     use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
     let scene = scene();
-    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
-    for threads in [1, all] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
+    let settings = PhotonMappingSettings {
+        alpha: 2.0 / 3.0,
+        radius: 0.0,
+        photons: 100_000,
+        max_depth: 64,
+    };
+    bench_passes(c, "sppm photons", settings.photons, || {
         let ctx = RenderContext {
             scene: scene.clone(),
             camera: PerspectiveCamera::new(&scene.camera, SIZE, SIZE),
             seed: 0,
         };
-        let settings = PhotonMappingSettings {
-            alpha: 2.0 / 3.0,
-            radius: 0.0,
-            photons: 100_000,
-            max_depth: 64,
-        };
-        let mut integrator = PhotonMapper::new(ctx, Variant::Sppm, settings);
-        let cancel = AtomicBool::new(false);
-        let mut group = c.benchmark_group(format!("sppm pass, {threads} thread(s)"));
-        group.throughput(Throughput::Elements(settings.photons));
-        group.sample_size(10);
-        let mut pass = 0;
-        group.bench_function("photons", |b| {
-            b.iter(|| {
-                pass += 1;
-                pool.install(|| integrator.render_pass(pass, &cancel))
-                    .unwrap()
-            })
-        });
-        group.finish();
-    }
+        Box::new(PhotonMapper::new(ctx, Variant::Sppm, settings))
+    });
 }
 
 criterion_group!(

@@ -6,11 +6,48 @@ pub mod path;
 pub mod ppm;
 
 use crate::camera::PerspectiveCamera;
+use crate::geometry::Ray;
 use crate::image::Image;
+use crate::material::{Bsdf, BsdfSample, TransportMode};
+use crate::sampling::sampler::Sampler;
 use crate::scene::Scene;
+use crate::scene::SurfaceInteraction;
+use glam::Vec3;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
+
+/// The next segment of a path leaving `si`: the BSDF sample, its throughput factor
+/// f |cos| / pdf, and the spawned ray.
+pub(crate) struct Scatter {
+    pub sample: BsdfSample,
+    pub weight: Vec3,
+    pub ray: Ray,
+}
+
+/// Samples the BSDF for the next direction of a path (camera paths in radiance mode, photons
+/// in importance mode). None ends the path: no sample, or a direction the geometric surface
+/// contradicts (`SurfaceInteraction::consistent`), which would leak light.
+pub(crate) fn scatter(
+    si: &SurfaceInteraction,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    sampler: &mut Sampler,
+    mode: TransportMode,
+) -> Option<Scatter> {
+    let uc = sampler.get_1d();
+    let u = sampler.get_2d();
+    let sample = bsdf.sample_f(wo, uc, u, mode)?;
+    let wi = si.shading.from_local(sample.wi).normalize();
+    if !si.consistent(wo, sample.wi, wi) {
+        return None;
+    }
+    Some(Scatter {
+        weight: sample.f * sample.wi.z.abs() / sample.pdf,
+        ray: si.spawn_ray(wi),
+        sample,
+    })
+}
 
 /// One parameter of an integrator.
 #[derive(Clone, Copy, Debug)]

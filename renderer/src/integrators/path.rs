@@ -7,7 +7,9 @@
 use crate::film::{Film, sanitize};
 use crate::geometry::Ray;
 use crate::image::Image;
-use crate::integrators::{Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext};
+use crate::integrators::{
+    Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext, scatter,
+};
 use crate::light::Light;
 use crate::material::{Bsdf, TransportMode};
 use crate::sampling::sampler::Sampler;
@@ -178,23 +180,17 @@ pub fn li(
         if !bsdf.is_delta() {
             l += beta * sample_direct(scene, &si, &bsdf, wo, sampler, rays, true);
         }
-        let uc = sampler.get_1d();
-        let u = sampler.get_2d();
-        let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Radiance) else {
+        let Some(next) = scatter(&si, &bsdf, wo, sampler, TransportMode::Radiance) else {
             break;
         };
-        let wi = si.shading.from_local(bs.wi).normalize();
-        if !si.consistent(wo, bs.wi, wi) {
-            break;
-        }
-        beta *= bs.f * bs.wi.z.abs() / bs.pdf;
-        prev_bsdf_pdf = bs.pdf;
-        specular_bounce = bs.is_delta;
-        if bs.eta != 1.0 {
-            eta_scale *= bs.eta * bs.eta;
+        beta *= next.weight;
+        prev_bsdf_pdf = next.sample.pdf;
+        specular_bounce = next.sample.is_delta;
+        if next.sample.eta != 1.0 {
+            eta_scale *= next.sample.eta * next.sample.eta;
         }
         prev_p = si.p;
-        ray = si.spawn_ray(wi);
+        ray = next.ray;
         if !beta.is_finite() || beta == Vec3::ZERO {
             break;
         }

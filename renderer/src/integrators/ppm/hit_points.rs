@@ -5,6 +5,7 @@
 
 use crate::geometry::Ray;
 use crate::integrators::path::sample_direct;
+use crate::integrators::scatter;
 use crate::material::{Bsdf, TransportMode};
 use crate::sampling::sampler::Sampler;
 use crate::scene::{Scene, SurfaceInteraction};
@@ -83,19 +84,14 @@ pub fn trace_eye_path(
         if depth == max_depth {
             break;
         }
-        let (uc, u) = (sampler.get_1d(), sampler.get_2d());
-        let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Radiance) else {
+        let Some(next) = scatter(&si, &bsdf, wo, sampler, TransportMode::Radiance) else {
             break;
         };
-        let wi = si.shading.from_local(bs.wi).normalize();
-        if !si.consistent(wo, bs.wi, wi) {
-            break;
-        }
-        beta *= bs.f * bs.wi.z.abs() / bs.pdf;
+        beta *= next.weight;
         if !beta.is_finite() || beta == Vec3::ZERO {
             break;
         }
-        ray = si.spawn_ray(wi);
+        ray = next.ray;
     }
     EyePath {
         emitted,

@@ -25,6 +25,7 @@ pub mod hit_points;
 use crate::film::sanitize;
 use crate::geometry::luminance;
 use crate::image::Image;
+use crate::integrators::scatter;
 use crate::integrators::{
     Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PixelLayer, PlotKind, PlotSeries,
     RenderContext,
@@ -475,15 +476,10 @@ impl PhotonMapper {
                 }
             }
             let wo = si.shading.to_local(-ray.d);
-            let (uc, u) = (sampler.get_1d(), sampler.get_2d());
-            let Some(bs) = bsdf.sample_f(wo, uc, u, TransportMode::Importance) else {
+            let Some(next) = scatter(&si, &bsdf, wo, sampler, TransportMode::Importance) else {
                 break;
             };
-            let wi = si.shading.from_local(bs.wi).normalize();
-            if !si.consistent(wo, bs.wi, wi) {
-                break;
-            }
-            let new_flux = flux * bs.f * bs.wi.z.abs() / bs.pdf;
+            let new_flux = flux * next.weight;
             // Russian roulette on the change of power (pbrt-v4 SPPM, section 13.8.3).
             let q = (1.0 - luminance(new_flux) / luminance(flux).max(f32::MIN_POSITIVE)).max(0.0);
             if sampler.get_1d() < q {
@@ -493,7 +489,7 @@ impl PhotonMapper {
             if !flux.is_finite() || flux == Vec3::ZERO {
                 break;
             }
-            ray = si.spawn_ray(wi);
+            ray = next.ray;
         }
     }
 
