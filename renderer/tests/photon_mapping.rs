@@ -274,9 +274,13 @@ fn log_log_slope(points: &[(f64, f64)]) -> f64 {
 /// radius). We fit passes 8 to 256 and average three seeds. Measured here: -0.71 to -0.74 for
 /// alpha = 2/3 and -1.04 to -1.06 for alpha = 1, a little steeper than the asymptote because
 /// the first passes shrink the radius fastest; we allow 0.12 around the theory, well inside
-/// the gap of 1/3 between the two rates, so a wrong update rule cannot pass.
+/// the gap of 1/3 between the two rates, so a wrong update rule cannot pass. The same runs
+/// measure the mean R^2, whose slope must be alpha - 1 (measured -0.32 to -0.335 for 2/3, 0 for
+/// 1): the kernel's bias is proportional to R^2 where radiance is smooth, so this is the rate
+/// at which the bias falls.
 #[test]
-fn mean_squared_error_falls_like_n_to_the_minus_alpha() {
+fn mean_squared_error_falls_like_n_to_the_minus_alpha_and_radius_squared_like_n_to_alpha_minus_one()
+{
     use caustica_renderer::camera::PerspectiveCamera;
     use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
     use caustica_renderer::integrators::{Integrator, RenderContext};
@@ -288,6 +292,7 @@ fn mean_squared_error_falls_like_n_to_the_minus_alpha() {
     for variant in [Variant::Sppm, Variant::Pppm, Variant::Ppm] {
         for alpha in [2.0 / 3.0, 1.0] {
             let mut mse = vec![0.0f64; checkpoints.len()];
+            let mut radius_sq = vec![0.0f64; checkpoints.len()];
             for seed in 0..3u64 {
                 let settings = PhotonMappingSettings {
                     alpha,
@@ -316,6 +321,11 @@ fn mean_squared_error_falls_like_n_to_the_minus_alpha() {
                             .sum::<f64>()
                             / img.pixels.len() as f64;
                         mse[next] += err / 3.0;
+                        radius_sq[next] += (0..img.pixels.len())
+                            .map(|i| pm.radius(i).powi(2))
+                            .sum::<f64>()
+                            / img.pixels.len() as f64
+                            / 3.0;
                         next += 1;
                     }
                 }
@@ -331,6 +341,20 @@ fn mean_squared_error_falls_like_n_to_the_minus_alpha() {
                 (slope + alpha).abs() < 0.12,
                 "{variant:?}, alpha {alpha}: slope {slope}, theory {}",
                 -alpha
+            );
+            // The kernel's bias is proportional to R^2 where the radiance is smooth, so it falls
+            // as the radius schedule does: R^2 like n^(alpha - 1).
+            let r_points: Vec<(f64, f64)> = checkpoints
+                .iter()
+                .map(|&n| n as f64)
+                .zip(radius_sq.iter().copied())
+                .collect();
+            let r_slope = log_log_slope(&r_points);
+            eprintln!("{variant:?}, alpha {alpha:.3}: mean R^2 slope {r_slope:.3}");
+            assert!(
+                (r_slope - (alpha - 1.0)).abs() < 0.08,
+                "{variant:?}, alpha {alpha}: R^2 slope {r_slope}, theory {}",
+                alpha - 1.0
             );
         }
     }
