@@ -58,16 +58,28 @@ fn bounce_rays(scene: &Scene, camera: &[Ray]) -> Vec<Ray> {
         .collect()
 }
 
+/// A pool of one thread and one with a thread per core: every figure is measured on both.
+fn pools() -> Vec<(usize, rayon::ThreadPool)> {
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    [1, all]
+        .into_iter()
+        .map(|t| {
+            (
+                t,
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .unwrap(),
+            )
+        })
+        .collect()
+}
+
 fn bench_rays(c: &mut Criterion) {
     let scene = scene();
     let camera = camera_rays(&scene);
     let bounce = bounce_rays(&scene, &camera);
-    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
-    for threads in [1, all] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
+    for (threads, pool) in pools() {
         for (kind, rays) in [("camera", &camera), ("diffuse-bounce", &bounce)] {
             let mut group = c.benchmark_group(format!("{kind} rays, {threads} thread(s)"));
             group.throughput(Throughput::Elements(rays.len() as u64));
@@ -105,12 +117,7 @@ fn bench_passes(
     elements: u64,
     make: impl Fn() -> Box<dyn Integrator>,
 ) {
-    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
-    for threads in [1, all] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
+    for (threads, pool) in pools() {
         let mut integrator = make();
         let cancel = AtomicBool::new(false);
         let mut group = c.benchmark_group(format!("{name}, {threads} thread(s)"));
