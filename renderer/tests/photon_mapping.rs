@@ -365,8 +365,9 @@ fn mean_squared_error_falls_like_n_to_the_minus_alpha_and_radius_squared_like_n_
 /// send photons onto its top side, right where the underside's hit points are. Nothing lights
 /// the underside, so the image must be black. The ceiling's shading normals lean 70 degrees
 /// off the geometric one, so by the shading frame alone many photons from above would look
-/// as if they arrived in front (a diffuse BSDF's own hemisphere test would not catch them). A diffuse plane under a point light, seen by the
-/// same integrators, gives rho / pi * I cos / d^2 (next-event estimation, exact).
+/// as if they arrived in front (a diffuse BSDF's own hemisphere test would not catch them).
+/// A diffuse plane under a point light, seen by the same integrators, gives
+/// rho / pi * I cos / d^2 (next-event estimation, exact).
 #[test]
 fn photons_behind_a_thin_wall_are_ignored_and_a_lit_plane_is_exact() {
     use caustica_renderer::material::Material;
@@ -481,6 +482,291 @@ fn the_grid_is_rebuilt_only_when_hit_points_or_radii_require_it() {
             assert!(
                 builds >= 1 && builds <= 10,
                 "{variant:?}: {builds} builds in 40 passes"
+            );
+        }
+    }
+}
+
+/// A diffuse floor (y = 0) lit by a point light of intensity I at height 1 both directly and
+/// through a perfect mirror facing down at height 2: the mirror's image of the light, at
+/// height H = 3, gives the floor an irradiance E(x) = I H / (H^2 + |x|^2)^(3/2) that reaches
+/// the camera only through photons (light, mirror, floor), and whose curvature is known. With
+/// max depth 2 no other photon path deposits (light, floor, mirror would need a third hit).
+struct MirroredLight {
+    desc: SceneDescription,
+    intensity: f64,
+    albedo: f64,
+}
+
+impl MirroredLight {
+    const IMAGE_HEIGHT: f64 = 3.0;
+
+    fn new() -> Self {
+        use caustica_renderer::material::Material;
+        use caustica_renderer::procedural::{camera_looking, quad};
+        use caustica_renderer::scene::PunctualLightDesc;
+        use glam::Vec3;
+        let v = Vec3::new;
+        let s = 20.0;
+        let (intensity, albedo) = (10.0, 0.5);
+        let desc = SceneDescription {
+            meshes: vec![
+                quad(
+                    "floor",
+                    [v(-s, 0., s), v(s, 0., s), v(s, 0., -s), v(-s, 0., -s)],
+                    0,
+                ),
+                quad(
+                    "mirror",
+                    [v(-s, 2., -s), v(s, 2., -s), v(s, 2., s), v(-s, 2., s)],
+                    1,
+                ),
+            ],
+            materials: vec![
+                Material::diffuse(Vec3::splat(albedo as f32)),
+                Material {
+                    roughness: 0.0,
+                    ..Material::default()
+                },
+            ],
+            lights: vec![PunctualLightDesc::Point {
+                position: v(0., 1., 0.),
+                intensity: Vec3::splat(intensity as f32),
+            }],
+            // Sees the floor within 0.05 of the light's foot.
+            camera: Some(camera_looking(v(0., 1.5, 0.), v(0., 0., 0.), 3.8)),
+            ..Default::default()
+        };
+        MirroredLight {
+            desc,
+            intensity,
+            albedo,
+        }
+    }
+
+    /// Irradiance from the light's mirror image at distance `d` from its foot.
+    fn mirrored_irradiance(&self, d: f64) -> f64 {
+        let h = Self::IMAGE_HEIGHT;
+        let q = h * h + d * d;
+        self.intensity * h / (q * q.sqrt())
+    }
+
+    /// The exact radiance the mirror contributes, averaged over pixels seeing `footprints`.
+    fn mirrored_radiance(&self, footprints: &[glam::DVec2]) -> f64 {
+        self.albedo / std::f64::consts::PI
+            * footprints
+                .iter()
+                .map(|x| self.mirrored_irradiance(x.length()))
+                .sum::<f64>()
+            / footprints.len() as f64
+    }
+
+    /// Direct irradiance at distance `d` from the light's foot.
+    fn direct_irradiance(&self, d: f64) -> f64 {
+        self.intensity / (1.0 + d * d).powf(1.5)
+    }
+
+    /// The mean of the mirrored irradiance over the disc of radius `r` about `x`: the expected
+    /// value of a photon density estimate with a uniform kernel of that radius. Midpoint rule
+    /// in the radius, the trapezoid rule (spectrally accurate for periodic integrands) in angle.
+    fn disc_mean(&self, x: glam::DVec2, r: f64) -> f64 {
+        let (nr, nphi) = (16, 16);
+        let mut sum = 0.0;
+        for i in 0..nr {
+            let rho = r * (i as f64 + 0.5) / nr as f64;
+            for j in 0..nphi {
+                let phi = std::f64::consts::TAU * j as f64 / nphi as f64;
+                let p = x + rho * glam::DVec2::new(phi.cos(), phi.sin());
+                sum += self.mirrored_irradiance(p.length()) * rho;
+            }
+        }
+        sum * (r / nr as f64) * (std::f64::consts::TAU / nphi as f64)
+            / (std::f64::consts::PI * r * r)
+    }
+
+    /// Where each pixel's centre sees the floor, as an offset from the light's foot.
+    fn pixel_footprints(
+        &self,
+        camera: &caustica_renderer::camera::PerspectiveCamera,
+    ) -> Vec<glam::DVec2> {
+        let (w, h) = (camera.width, camera.height);
+        (0..w * h)
+            .map(|i| {
+                let film = glam::Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+                let ray = camera.generate_ray(film);
+                let t = -ray.o.y / ray.d.y;
+                let p = ray.o + t * ray.d;
+                glam::DVec2::new(p.x as f64, p.z as f64)
+            })
+            .collect()
+    }
+}
+
+/// The expected indirect estimate and its variance, accumulated pass by pass from the radii
+/// each pixel gathered with. All three variants' indirect estimates are the mean over passes
+/// of one-pass estimates tau_k / (pi R_k^2 P): for PPPM by construction (Knaus & Zwicker 2011,
+/// eq. 21), for PPM and SPPM because eq. 7's rescaling of tau by R_{k+1}^2 / R_k^2 telescopes
+/// (Hachisuka et al. 2008). R_k is fixed before pass k's photons are traced, so given it the
+/// pass's expected estimate is rho / pi times the disc mean of E, and its variance, the
+/// estimate being c M with M binomial (P photons, probability p = the disc's share of the
+/// emitted flux), is c^2 P p (1 - p). The pixels' estimates are correlated, so the standard
+/// deviation of their mean is bounded by the mean of theirs; passes are independent given
+/// the radii, so their variances add.
+struct ExpectedEstimate {
+    passes: u64,
+    mean_sum: f64,
+    variance_sum: f64,
+}
+
+impl ExpectedEstimate {
+    fn add_pass(
+        &mut self,
+        setup: &MirroredLight,
+        footprints: &[glam::DVec2],
+        radii: &[f64],
+        photons: u64,
+    ) {
+        use std::f64::consts::PI;
+        let f = setup.albedo / PI;
+        let pixels = footprints.len() as f64;
+        let mut sd = 0.0;
+        for (x, r) in footprints.iter().zip(radii) {
+            let a = setup.disc_mean(*x, *r);
+            self.mean_sum += f * a / pixels;
+            let c = f * 4.0 * PI * setup.intensity / (PI * r * r * photons as f64);
+            let p = a * PI * r * r / (4.0 * PI * setup.intensity);
+            sd += (c * c * photons as f64 * p * (1.0 - p)).sqrt() / pixels;
+        }
+        self.variance_sum += sd * sd;
+        self.passes += 1;
+    }
+
+    /// Expected kernel bias of the mean over pixels, and its standard deviation.
+    fn bias_and_sigma(&self, setup: &MirroredLight, footprints: &[glam::DVec2]) -> (f64, f64) {
+        let n = self.passes as f64;
+        (
+            self.mean_sum / n - setup.mirrored_radiance(footprints),
+            self.variance_sum.sqrt() / n,
+        )
+    }
+}
+
+/// The kernel's bias, measured directly: on the mirrored light, whose photon-carried radiance
+/// has known curvature, the image's mean less the exact radiance is the density estimate's
+/// bias (the direct part is exact but for the pixels' jitter, below 1e-5 of it here). At every
+/// checkpoint it must match the expectation computed from the radii the integrator used
+/// (`ExpectedEstimate`) within four standard deviations: this checks eqs. 5-7 and PPPM's
+/// averaging, not only the radius schedule.
+///
+/// Its rate: the expected bias is the mean over passes of disc-mean biases, each proportional
+/// to R_k^2 for small R, so it falls like n^(alpha - 1) (K&Z eq. 21). Far out (passes 2^13 to
+/// 2^16) PPPM's expectation's slope must be within 0.02 of alpha - 1; over the measured passes,
+/// 8 to 256, with a large first radius, the slope is shallower (the sum's 1/n term and the
+/// disc mean's quartic term still count), so there each variant's measured slope (from the
+/// first to the last checkpoint) must match its expectation's within four standard
+/// deviations of the two logarithms. alpha 1/2, 2/3 and 1 have distinct rates.
+#[test]
+fn the_kernel_bias_matches_its_expectation_and_falls_like_n_to_the_alpha_minus_one() {
+    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
+    use caustica_renderer::integrators::{Integrator, RenderContext};
+    use std::f64::consts::PI;
+    use std::sync::atomic::AtomicBool;
+    let setup = MirroredLight::new();
+    let scene = Arc::new(Scene::build(setup.desc.clone()).unwrap());
+    let camera = PerspectiveCamera::new(&scene.camera, 16, 16);
+    let footprints = setup.pixel_footprints(&camera);
+    let pixels = footprints.len() as f64;
+    let direct: f64 = footprints
+        .iter()
+        .map(|x| setup.albedo / PI * setup.direct_irradiance(x.length()))
+        .sum::<f64>()
+        / pixels;
+    let cancel = AtomicBool::new(false);
+    let (first, last) = (8u64, 256u64);
+    let (initial_radius, photons) = (2.25f64, 40_000);
+    for alpha in [0.5, 2.0 / 3.0, 1.0] {
+        // The asymptotic rate of PPPM's expectation at the light's foot.
+        let centre = [glam::DVec2::ZERO];
+        let mut far = ExpectedEstimate {
+            passes: 0,
+            mean_sum: 0.0,
+            variance_sum: 0.0,
+        };
+        let mut radius_sq = initial_radius * initial_radius;
+        let mut far_points = Vec::new();
+        for k in 1..=1u64 << 16 {
+            far.add_pass(&setup, &centre, &[radius_sq.sqrt()], photons);
+            radius_sq *= (k as f64 + alpha) / (k as f64 + 1.0);
+            if k >= 1 << 13 && k.is_power_of_two() {
+                far_points.push((k as f64, -far.bias_and_sigma(&setup, &centre).0));
+            }
+        }
+        if alpha < 1.0 {
+            let far_slope = log_log_slope(&far_points);
+            eprintln!("alpha {alpha:.3}: PPPM's expected bias, slope {far_slope:.3} far out");
+            assert!(
+                (far_slope - (alpha - 1.0)).abs() < 0.02,
+                "alpha {alpha}: {far_slope}"
+            );
+        }
+        for variant in [Variant::Pppm, Variant::Sppm, Variant::Ppm] {
+            let settings = PhotonMappingSettings {
+                alpha,
+                radius: initial_radius,
+                photons,
+                max_depth: 2,
+            };
+            let mut pm = PhotonMapper::new(
+                RenderContext {
+                    scene: scene.clone(),
+                    camera,
+                    seed: 5,
+                },
+                variant,
+                settings,
+            );
+            let mut expected = ExpectedEstimate {
+                passes: 0,
+                mean_sum: 0.0,
+                variance_sum: 0.0,
+            };
+            let mut ends = Vec::new();
+            for pass in 0..last {
+                let radii: Vec<f64> = (0..footprints.len()).map(|i| pm.radius(i)).collect();
+                pm.render_pass(pass, &cancel).unwrap();
+                expected.add_pass(&setup, &footprints, &radii, photons);
+                let n = pass + 1;
+                if n >= first && n.is_power_of_two() {
+                    let img = pm.image();
+                    let mean = img.pixels.iter().map(|p| p.x as f64).sum::<f64>() / pixels;
+                    let measured = mean - direct - setup.mirrored_radiance(&footprints);
+                    let (expected_bias, sigma) = expected.bias_and_sigma(&setup, &footprints);
+                    eprintln!(
+                        "{variant:?}, alpha {alpha:.3}, n {n}: bias {measured:.5}, expected {expected_bias:.5} +- {sigma:.5}"
+                    );
+                    assert!(
+                        (measured - expected_bias).abs() < 4.0 * sigma,
+                        "{variant:?}, alpha {alpha}, n {n}: bias {measured}, expected {expected_bias} +- {sigma}"
+                    );
+                    if n == first || n == last {
+                        ends.push((measured, expected_bias, sigma));
+                    }
+                }
+            }
+            let span = (last as f64 / first as f64).ln();
+            let slope = (ends[1].0 / ends[0].0).ln() / span;
+            let expected_slope = (ends[1].1 / ends[0].1).ln() / span;
+            let tolerance = 4.0
+                * ((ends[0].2 / ends[0].1).powi(2) + (ends[1].2 / ends[1].1).powi(2)).sqrt()
+                / span;
+            eprintln!(
+                "{variant:?}, alpha {alpha:.3}: bias slope {slope:.3}, expected {expected_slope:.3} +- {:.3}",
+                tolerance / 4.0
+            );
+            assert!(
+                (slope - expected_slope).abs() < tolerance,
+                "{variant:?}, alpha {alpha}: bias slope {slope}, expected {expected_slope}"
             );
         }
     }
