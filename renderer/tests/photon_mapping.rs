@@ -119,28 +119,6 @@ fn a_scene_whose_light_cannot_reach_the_camera_is_black() {
     }
 }
 
-/// Pixels more than 2 pixels away from the light (reference luminance above 2). PPM keeps one
-/// jittered hit point per pixel for the whole run (no anti-aliasing), so where a pixel covers
-/// the edge of the small, bright light its value is the light's or the ceiling's, 25 times
-/// apart, instead of their pixel-area average: that sampling error dwarfs the estimator's.
-fn away_from_the_light(reference: &Image) -> Vec<usize> {
-    let (w, h) = (reference.width as i64, reference.height as i64);
-    let bright = |x: i64, y: i64| {
-        x >= 0
-            && y >= 0
-            && x < w
-            && y < h
-            && caustica_renderer::geometry::luminance(reference.pixel(x as usize, y as usize)) > 2.0
-    };
-    (0..w * h)
-        .filter(|i| {
-            let (x, y) = (i % w, i / w);
-            !(-2..=2).any(|dy| (-2..=2).any(|dx| bright(x + dx, y + dy)))
-        })
-        .map(|i| i as usize)
-        .collect()
-}
-
 fn mean_luminance_of(img: &Image, pixels: &[usize]) -> f64 {
     pixels
         .iter()
@@ -150,38 +128,36 @@ fn mean_luminance_of(img: &Image, pixels: &[usize]) -> f64 {
 }
 
 /// The photon mappers and the path tracer agree on the bundled glass Cornell box: mean
-/// luminance within 1 percent over the pixels where the radiance is smooth (the path tracer's
-/// standard error there, from its per-pixel spread at 1024 samples, is about 0.2 %), and the
-/// relMSE between them shrinks as the photon mapper runs longer.
+/// luminance within 1 percent over the whole image, and the relMSE between them shrinks as
+/// the photon mapper runs longer. The image mean's noise is dominated by the dozen pixels on
+/// the small light's edges, each a binomial share of a radiance 25 times the ceiling's: at 64
+/// eye samples a pixel that is 0.8 % of the mean (measured over seeds), at 1024 samples 0.2 %
+/// (the path tracer's spread over six seeds: 0.1 %). So the photon mappers run 1024 passes of
+/// 2000 photons; measured over seeds 11 to 14: within 0.35 %.
 #[test]
 fn photon_mappers_agree_with_the_path_tracer_on_cornell_glass() {
     use caustica_renderer::image::compare;
     use caustica_renderer::procedural::cornell_box;
     let size = 48;
     let (reference, _) = render(cornell_box(true), "pt", &[], 1024, size);
-    let smooth = away_from_the_light(&reference);
-    assert!(
-        smooth.len() > size as usize * size as usize / 3,
-        "most of the image is smooth ({})",
-        smooth.len()
-    );
-    let reference_mean = mean_luminance_of(&reference, &smooth);
+    let all: Vec<usize> = (0..reference.pixels.len()).collect();
+    let reference_mean = mean_luminance_of(&reference, &all);
     for integrator in ["sppm", "ppm", "pppm"] {
         let (short, _) = render(
             cornell_box(true),
             integrator,
-            &[("photons", 20_000.0)],
-            4,
+            &[("photons", 2_000.0)],
+            16,
             size,
         );
         let (long, _) = render(
             cornell_box(true),
             integrator,
-            &[("photons", 20_000.0)],
-            64,
+            &[("photons", 2_000.0)],
+            1024,
             size,
         );
-        let ratio = mean_luminance_of(&long, &smooth) / reference_mean;
+        let ratio = mean_luminance_of(&long, &all) / reference_mean;
         let (e_short, e_long) = (
             compare(&short, &reference).unwrap().rel_mse,
             compare(&long, &reference).unwrap().rel_mse,

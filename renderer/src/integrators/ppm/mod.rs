@@ -145,8 +145,6 @@ pub struct PhotonMapper {
     radius_floor_sq: f64,
     pixels: Vec<PixelStats>,
     hit_points: Vec<Option<HitPoint>>,
-    /// PPM: emission seen through the fixed eye paths.
-    fixed_emitted: Vec<Vec3>,
     /// PPPM: the sum of the per-pass images, and the current global radius.
     pass_sum: Vec<DVec3>,
     global_radius_sq: f64,
@@ -215,7 +213,6 @@ impl PhotonMapper {
                 pixels
             ],
             hit_points: vec![None; pixels],
-            fixed_emitted: vec![Vec3::ZERO; pixels],
             pass_sum: vec![DVec3::ZERO; if variant == Variant::Pppm { pixels } else { 0 }],
             global_radius_sq: initial_radius_sq,
             photons_emitted: 0,
@@ -302,8 +299,13 @@ impl PhotonMapper {
         }
     }
 
-    /// Eye pass: new hit points (SPPM, PPPM, and PPM's first pass) and each pixel's direct
-    /// estimate for this pass.
+    /// Eye pass: each pixel's direct estimate for this pass (emission seen through specular
+    /// chains plus next-event estimation at the first non-specular vertex), from a camera ray
+    /// with fresh jitter, and the hit points the photons are gathered at: new every pass for
+    /// SPPM and PPPM, the first pass's kept for the whole run by PPM. PPM's direct estimate
+    /// re-jitters too (as SPPM's does): the image's high frequencies (light edges, texture)
+    /// then converge to the pixel integral; only the photon-carried part, the smooth one, is
+    /// point-sampled at the fixed hit points, as in Hachisuka et al. 2008.
     fn eye_pass(
         &mut self,
         pass: u64,
@@ -317,53 +319,41 @@ impl PhotonMapper {
             self.ctx.seed,
             self.settings.max_depth,
         );
-        let retrace = self.variant != Variant::Ppm || pass == 0;
+        let keep_hit_points = self.variant == Variant::Ppm && pass > 0;
         let mut direct = vec![Vec3::ZERO; self.pixels.len()];
         let rows: Vec<PassStats> = direct
             .par_chunks_mut(width)
             .zip(self.hit_points.par_chunks_mut(width))
-            .zip(self.fixed_emitted.par_chunks_mut(width))
             .enumerate()
-            .map(|(y, ((direct_row, hp_row), fixed_row))| {
+            .map(|(y, (direct_row, hp_row))| {
                 if cancel.load(Ordering::Relaxed) {
                     return Err(Cancelled);
                 }
                 let mut sampler = Sampler::new(seed);
+                let mut eye = Sampler::new(seed ^ EYE_STREAM);
                 let mut row = PassStats::default();
                 for x in 0..width {
                     let pixel = (y * width + x) as u64;
                     sampler.start_pixel_sample(pixel, pass);
-                    let emitted = if retrace {
-                        let mut eye = Sampler::new(seed ^ EYE_STREAM);
-                        eye.start_pixel_sample(
-                            pixel,
-                            if self.variant == Variant::Ppm {
-                                0
-                            } else {
-                                pass
-                            },
-                        );
-                        let film = Vec2::new(x as f32, y as f32) + eye.get_2d();
-                        let path = trace_eye_path(
-                            scene,
-                            camera.generate_ray(film),
-                            &mut eye,
-                            max_depth,
-                            &mut row.rays,
-                        );
-                        hp_row[x] = path.hit_point;
-                        fixed_row[x] = path.emitted;
-                        path.emitted
-                    } else {
-                        fixed_row[x]
-                    };
-                    let nee = hp_row[x].map_or(Vec3::ZERO, |hp| {
+                    eye.start_pixel_sample(pixel, pass);
+                    let film = Vec2::new(x as f32, y as f32) + eye.get_2d();
+                    let path = trace_eye_path(
+                        scene,
+                        camera.generate_ray(film),
+                        &mut eye,
+                        max_depth,
+                        &mut row.rays,
+                    );
+                    let nee = path.hit_point.as_ref().map_or(Vec3::ZERO, |hp| {
                         hp.direct(scene, &mut sampler, &mut row.rays)
                     });
-                    direct_row[x] = sanitize(emitted + nee).unwrap_or_else(|| {
+                    direct_row[x] = sanitize(path.emitted + nee).unwrap_or_else(|| {
                         row.dropped += 1;
                         Vec3::ZERO
                     });
+                    if !keep_hit_points {
+                        hp_row[x] = path.hit_point;
+                    }
                     row.samples += 1;
                 }
                 Ok(row)
