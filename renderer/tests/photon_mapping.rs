@@ -747,3 +747,27 @@ fn the_kernel_bias_matches_its_expectation_and_falls_like_n_to_the_alpha_minus_o
         }
     }
 }
+/// Interpolated normals far from the faces (a sphere of six segments, normals up to 30
+/// degrees off) change what photons must carry: the adjoint BSDF's correction when they
+/// scatter and the ratio of the hit point's shading cosine to the photon's geometric cosine
+/// when they are gathered (Veach 1997, section 5.3). With both, SPPM agrees with the path
+/// tracer (measured over three seeds: +0.06 to +0.37 %, a standard deviation of about 0.2 %
+/// at 256 passes of 50,000 photons; the path tracer's is 0.03 %). Without the gather ratio
+/// it was 0.4 % low, without either 2.7 % low, with the hit point's own geometric cosine 1.2
+/// to 2.4 % high (growing with the radius): we allow 0.8 %, four standard deviations.
+#[test]
+fn photons_honour_shading_normals_as_the_path_tracer_does() {
+    let scene = sphere_with_point_light(6);
+    let (reference, _) = render(scene.clone(), "pt", &[], 2048, 24);
+    let (img, dropped) = render(
+        scene,
+        "sppm",
+        &[("photons", 50_000.0), ("radius", 0.04)],
+        256,
+        24,
+    );
+    assert_eq!(dropped, 0);
+    let ratio = mean(&img) / mean(&reference);
+    eprintln!("sppm / pt on the faceted sphere: {ratio:.4}");
+    assert!((ratio - 1.0).abs() < 8e-3, "sppm / pt = {ratio}");
+}

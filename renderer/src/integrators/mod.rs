@@ -42,8 +42,22 @@ pub(crate) fn scatter(
     if !si.consistent(wo, sample.wi, wi) {
         return None;
     }
+    let weight = match mode {
+        TransportMode::Radiance => sample.f * sample.wi.z.abs() / sample.pdf,
+        // Importance flows the other way, and with shading normals the adjoint BSDF is not f:
+        // f*(wo, wi) |wi.ns| = f(wo, wi) |wo.ns| |wi.ng| / |wo.ng| (Veach 1997, eq. 5.19),
+        // without which photons and light subpaths gain or lose energy wherever interpolated
+        // normals depart from the faces.
+        TransportMode::Importance => {
+            let wo_ng = si.wo.dot(si.n).abs();
+            if wo_ng == 0.0 {
+                return None;
+            }
+            sample.f * (wo.z.abs() * wi.dot(si.n).abs() / wo_ng) / sample.pdf
+        }
+    };
     Some(Scatter {
-        weight: sample.f * sample.wi.z.abs() / sample.pdf,
+        weight,
         ray: si.spawn_ray(wi),
         sample,
     })

@@ -25,17 +25,21 @@ pub struct HitPoint {
 
 impl HitPoint {
     /// The hit point's contribution factor for a photon arriving from direction `wi` (world,
-    /// pointing away from the surface): beta f(wo, wi), or zero from behind.
-    pub fn response(&self, wi: Vec3) -> Vec3 {
+    /// pointing away from the surface) at a surface of geometric normal `photon_normal`:
+    /// beta f(wo, wi) |wi.ns| / |wi.ng_photon|, or zero from behind. Photon density measures
+    /// flux per unit area of the surface the photons land on, the integral of L |wi.ng_photon|,
+    /// while the reflected radiance integrates f L |wi.ns| with the hit point's shading normal
+    /// (Veach 1997, section 5.3); the ratio of cosines makes the estimate the one the path
+    /// tracer computes, and is exactly 1 where shading and geometric normals agree.
+    pub fn response(&self, wi: Vec3, photon_normal: Vec3) -> Vec3 {
         if wi.dot(self.facing) <= 0.0 {
             return Vec3::ZERO;
         }
+        let cos_geometric = wi.dot(photon_normal).abs();
+        let wi_local = self.si.shading.to_local(wi);
         self.beta
-            * self.bsdf.f(
-                self.wo,
-                self.si.shading.to_local(wi),
-                TransportMode::Radiance,
-            )
+            * self.bsdf.f(self.wo, wi_local, TransportMode::Radiance)
+            * (wi_local.z.abs() / cos_geometric)
     }
 
     /// Direct light at the hit point by next-event estimation.

@@ -452,7 +452,7 @@ impl PhotonMapper {
                     if ((si.p - hp.si.p).length_squared() as f64) > self.radius_sq(c) {
                         continue;
                     }
-                    let r = hp.response(wi);
+                    let r = hp.response(wi, si.n);
                     if r == Vec3::ZERO {
                         continue;
                     }
