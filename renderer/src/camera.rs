@@ -1,5 +1,11 @@
 //! Perspective pinhole camera (glTF spec 3.10: looks down its local -Z with +Y up).
 //! Film coordinates run from the top-left corner in pixels, x right and y down.
+//!
+//! For light tracing the camera is also a sensor with importance W_e (pbrt-v3 section 16.1.1):
+//! W_e(w) = 1 / (A cos^4 theta) inside the field of view, A the image's area on the plane at
+//! distance 1, so that the importance of one pixel integrates (times cos) to 1 / pixel count.
+//! The pinhole is a delta in position (pdf 1 by convention); directions have the solid-angle
+//! pdf 1 / (A cos^3 theta) of `generate_ray` with a uniform film position.
 
 use crate::geometry::{Bounds3, Ray};
 use glam::{Affine3A, Vec2, Vec3};
@@ -40,8 +46,23 @@ pub struct PerspectiveCamera {
     pub camera_to_world: Affine3A,
     pub width: u32,
     pub height: u32,
+    world_to_camera: Affine3A,
     tan_half_y: f32,
     aspect: f32,
+}
+
+/// A connection from a point to the camera (pbrt-v3's `Camera::Sample_Wi`).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraWiSample {
+    /// Unit direction from the reference point towards the pinhole.
+    pub wi: Vec3,
+    pub importance: f32,
+    /// Solid-angle density at the reference point: distance^2 / cos at the camera.
+    pub pdf: f32,
+    pub p_camera: Vec3,
+    pub dist: f32,
+    /// Where the connection lands on the film (pixels).
+    pub raster: Vec2,
 }
 
 impl PerspectiveCamera {
@@ -52,6 +73,7 @@ impl PerspectiveCamera {
             .unwrap_or(width as f32 / height.max(1) as f32);
         PerspectiveCamera {
             camera_to_world: desc.camera_to_world,
+            world_to_camera: desc.camera_to_world.inverse(),
             width,
             height,
             tan_half_y: (desc.yfov.clamp(1e-4, 3.1) / 2.0).tan(),
@@ -80,6 +102,75 @@ impl PerspectiveCamera {
     }
 }
 
+impl PerspectiveCamera {
+    pub fn forward(&self) -> Vec3 {
+        self.camera_to_world.transform_vector3(Vec3::NEG_Z).normalize()
+    }
+
+    /// Area of the image on the plane at distance 1 in front of the pinhole.
+    fn film_area(&self) -> f32 {
+        4.0 * self.tan_half_y * self.tan_half_y * self.aspect
+    }
+
+    /// Film position (pixels) of a ray leaving the pinhole in direction `w`; None outside.
+    pub fn raster(&self, w: Vec3) -> Option<Vec2> {
+        let local = self.world_to_camera.transform_vector3(w);
+        if !(local.z < 0.0) {
+            return None;
+        }
+        let ndc_x = local.x / -local.z / (self.tan_half_y * self.aspect);
+        let ndc_y = local.y / -local.z / self.tan_half_y;
+        let film = Vec2::new(
+            (ndc_x + 1.0) * 0.5 * self.width as f32,
+            (1.0 - ndc_y) * 0.5 * self.height as f32,
+        );
+        (film.x >= 0.0
+            && film.y >= 0.0
+            && film.x < self.width as f32
+            && film.y < self.height as f32)
+            .then_some(film)
+    }
+
+    /// Importance W_e of the ray leaving the pinhole in direction `w` (unit), and where it
+    /// lands on the film.
+    pub fn importance(&self, w: Vec3) -> Option<(f32, Vec2)> {
+        let raster = self.raster(w)?;
+        let cos = w.dot(self.forward());
+        let we = 1.0 / (self.film_area() * cos * cos * cos * cos);
+        we.is_finite().then_some((we, raster))
+    }
+
+    /// Solid-angle density with which `generate_ray` picks direction `w` (zero outside the
+    /// film); the position's density is a delta, 1 by convention.
+    pub fn pdf_we_dir(&self, w: Vec3) -> f32 {
+        if self.raster(w).is_none() {
+            return 0.0;
+        }
+        let cos = w.dot(self.forward());
+        1.0 / (self.film_area() * cos * cos * cos)
+    }
+
+    /// Connects `p_ref` to the pinhole.
+    pub fn sample_wi(&self, p_ref: Vec3) -> Option<CameraWiSample> {
+        let d = self.position() - p_ref;
+        let dist = d.length();
+        if !(dist > 0.0 && dist.is_finite()) {
+            return None;
+        }
+        let wi = d / dist;
+        let (importance, raster) = self.importance(-wi)?;
+        let cos = (-wi).dot(self.forward());
+        Some(CameraWiSample {
+            wi,
+            importance,
+            pdf: dist * dist / cos,
+            p_camera: self.position(),
+            dist,
+            raster,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -104,5 +195,64 @@ mod tests {
             (right.d.x / right.d.z.abs() - 2.0).abs() < 1e-5,
             "aspect 2 widens x"
         );
+    }
+
+    fn tilted_camera() -> PerspectiveCamera {
+        let desc = CameraDesc {
+            camera_to_world: Affine3A::from_rotation_translation(
+                glam::Quat::from_euler(glam::EulerRot::YXZ, 0.4, -0.3, 0.1),
+                Vec3::new(1.0, 2.0, 3.0),
+            ),
+            yfov: 50f32.to_radians(),
+            aspect: None,
+        };
+        PerspectiveCamera::new(&desc, 64, 48)
+    }
+
+    #[test]
+    fn raster_inverts_generate_ray_and_sample_wi_points_back() {
+        let cam = tilted_camera();
+        for film in [Vec2::new(0.5, 0.5), Vec2::new(63.2, 10.0), Vec2::new(31.0, 47.5)] {
+            let ray = cam.generate_ray(film);
+            let back = cam.raster(ray.d).unwrap();
+            assert!((back - film).length() < 1e-3, "{film} -> {back}");
+            let p = ray.o + ray.d * 3.7;
+            let s = cam.sample_wi(p).unwrap();
+            assert!((s.raster - film).length() < 1e-3);
+            assert!((s.dist - 3.7).abs() < 1e-4 && (s.wi + ray.d).length() < 1e-5);
+        }
+        assert!(cam.raster(-cam.forward()).is_none());
+    }
+
+    /// The importance is normalised: the integral of W_e cos over all directions is 1 (one
+    /// unit of importance over the whole film), and over a pixel 1 / pixel count. Estimated
+    /// with 10^6 directions uniform on the sphere; the standard error is about 0.3 %.
+    #[test]
+    fn importance_integrates_to_one_over_the_film_and_its_pdf_matches_generate_ray() {
+        use crate::sampling::warp::{sample_uniform_sphere, uniform_sphere_pdf};
+        let cam = tilted_camera();
+        let mut sampler = crate::sampling::sampler::Sampler::new(3);
+        let n = 1_000_000;
+        let (mut total, mut pixel) = (0.0f64, 0.0f64);
+        for i in 0..n {
+            sampler.start_pixel_sample(i, 0);
+            let w = sample_uniform_sphere(sampler.get_2d());
+            if let Some((we, raster)) = cam.importance(w) {
+                let v = (we * w.dot(cam.forward()) / uniform_sphere_pdf()) as f64;
+                total += v;
+                if raster.x < 8.0 && raster.y < 6.0 {
+                    pixel += v;
+                }
+            }
+        }
+        let (total, block) = (total / n as f64, pixel / n as f64);
+        assert!((total - 1.0).abs() < 0.012, "integral {total}");
+        // An 8 x 6 block of the 64 x 48 film holds 1/64 of the importance.
+        assert!((block * 64.0 - 1.0).abs() < 0.1, "block {block}");
+        // pdf_we_dir is generate_ray's density: 1 / (A cos^3) against a uniform film sample.
+        let w = cam.generate_ray(Vec2::new(10.0, 40.0)).d;
+        let cos = w.dot(cam.forward());
+        let (we, _) = cam.importance(w).unwrap();
+        assert!((cam.pdf_we_dir(w) / (we * cos) - 1.0).abs() < 1e-5);
     }
 }

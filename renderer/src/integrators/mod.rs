@@ -9,7 +9,7 @@ use crate::camera::PerspectiveCamera;
 use crate::geometry::Ray;
 use crate::image::Image;
 use crate::material::{Bsdf, BsdfSample, TransportMode};
-use crate::sampling::sampler::Sampler;
+use crate::sampling::sampler::SampleSource;
 use crate::scene::Scene;
 use crate::scene::SurfaceInteraction;
 use glam::Vec3;
@@ -32,7 +32,7 @@ pub(crate) fn scatter(
     si: &SurfaceInteraction,
     bsdf: &Bsdf,
     wo: Vec3,
-    sampler: &mut Sampler,
+    sampler: &mut impl SampleSource,
     mode: TransportMode,
 ) -> Option<Scatter> {
     let uc = sampler.get_1d();

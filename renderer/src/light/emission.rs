@@ -1,5 +1,10 @@
-//! Emission sampling for light tracing (pbrt-v4's `Light::SampleLe`, section 12.1): a photon's
-//! first ray and its power weight Le cos / (pmf pdf_pos pdf_dir), for every kind of light.
+//! Emission sampling for light tracing (pbrt-v4's `Light::SampleLe` and `PDF_Le`, section
+//! 12.1): a light subpath's first ray with its emitted radiance and the densities of its
+//! origin (area measure) and direction (solid angle), for every kind of light. A photon's
+//! power weight is Le cos / (pmf pdf_pos pdf_dir). Infinite lights start their rays on a disc
+//! as wide as the scene's bounding sphere (pdf_pos = 1 / (pi r^2)). Delta densities (a point
+//! light's position, a directional light's direction) are 1 here and 0 from `pdf_le`, as in
+//! pbrt, so that BDPT's MIS treats them as unsampleable.
 
 use crate::geometry::{Frame, Ray, offset_ray_origin};
 use crate::light::Light;
@@ -11,22 +16,41 @@ use crate::scene::Scene;
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
-/// A photon leaving a light: its ray and flux (already divided by every pdf but the light's
-/// selection probability, which the caller divides by).
+/// A ray leaving a light.
 #[derive(Clone, Copy, Debug)]
-pub struct EmittedPhoton {
+pub struct EmittedRay {
     pub ray: Ray,
-    pub flux: Vec3,
+    /// Emitted radiance (area and environment lights), intensity (point, spot) or irradiance
+    /// (directional) along the ray.
+    pub le: Vec3,
+    /// The emitting surface's normal (the disc's for infinite lights), zero for points.
+    pub n: Vec3,
+    /// Density of the origin, area measure (1 for a delta position).
+    pub pdf_pos: f32,
+    /// Density of the direction, solid angle (1 for a delta direction).
+    pub pdf_dir: f32,
 }
 
-/// Samples an emitted photon from `light` with uniform numbers `u_pos`, `u_dir` and `u_side`.
+impl EmittedRay {
+    /// The ray's power weight Le |cos| / (pdf_pos pdf_dir), before the light's selection pmf.
+    pub fn flux(&self) -> Vec3 {
+        let cos = if self.n == Vec3::ZERO {
+            1.0
+        } else {
+            self.n.dot(self.ray.d).abs()
+        };
+        self.le * (cos / (self.pdf_pos * self.pdf_dir))
+    }
+}
+
+/// Samples a ray leaving `light` with uniform numbers `u_pos`, `u_dir` and `u_side`.
 pub fn sample_le(
     scene: &Scene,
     light: &Light,
     u_pos: Vec2,
     u_dir: Vec2,
     u_side: f32,
-) -> Option<EmittedPhoton> {
+) -> Option<EmittedRay> {
     let (center, radius) = scene.bounds.bounding_sphere();
     let radius = radius.max(1e-6);
     match light {
@@ -42,32 +66,39 @@ pub fn sample_le(
             let local = sample_cosine_hemisphere(u_dir);
             let d = Frame::from_z(n).from_local(local);
             let le = a.l(scene, uv, d);
-            // Le cos / (pdf_pos pdf_dir) = Le cos / ((1 / area) (cos / pi) side_pdf).
-            let flux = le * (PI * a.area / side_pdf);
             let p_error = crate::scene::triangle::hit_point_and_error(
                 &scene.positions[a.triangle as usize],
                 b,
             )
             .1;
-            (flux.max_element() > 0.0).then(|| EmittedPhoton {
+            (le.max_element() > 0.0 && local.z > 0.0).then(|| EmittedRay {
                 ray: Ray::new(offset_ray_origin(p, p_error, n, d), d),
-                flux,
+                le,
+                n,
+                pdf_pos: 1.0 / a.area,
+                pdf_dir: local.z / PI * side_pdf,
             })
         }
         Light::Point(l) => {
             let d = sample_uniform_sphere(u_dir);
-            Some(EmittedPhoton {
+            Some(EmittedRay {
                 ray: Ray::new(l.position, d),
-                flux: l.intensity / uniform_sphere_pdf(),
+                le: l.intensity,
+                n: Vec3::ZERO,
+                pdf_pos: 1.0,
+                pdf_dir: uniform_sphere_pdf(),
             })
         }
         Light::Spot(s) => {
             let local = sample_uniform_cone(u_dir, s.cos_outer);
             let d = s.frame.from_local(local);
-            let flux = s.intensity * s.falloff(local.z) / uniform_cone_pdf(s.cos_outer);
-            (flux.max_element() > 0.0).then(|| EmittedPhoton {
+            let le = s.intensity * s.falloff(local.z);
+            (le.max_element() > 0.0).then(|| EmittedRay {
                 ray: Ray::new(s.position, d),
-                flux,
+                le,
+                n: Vec3::ZERO,
+                pdf_pos: 1.0,
+                pdf_dir: uniform_cone_pdf(s.cos_outer),
             })
         }
         Light::Directional(l) => {
@@ -75,9 +106,12 @@ pub fn sample_le(
             let frame = Frame::from_z(l.direction);
             let disk = sample_uniform_disk_concentric(u_pos) * radius;
             let o = center - l.direction * radius + frame.s * disk.x + frame.t * disk.y;
-            Some(EmittedPhoton {
+            Some(EmittedRay {
                 ray: Ray::new(o, l.direction),
-                flux: l.irradiance * (PI * radius * radius),
+                le: l.irradiance,
+                n: l.direction,
+                pdf_pos: 1.0 / (PI * radius * radius),
+                pdf_dir: 1.0,
             })
         }
         Light::Environment(e) => {
@@ -86,11 +120,40 @@ pub fn sample_le(
             let frame = Frame::from_z(-to_env);
             let disk = sample_uniform_disk_concentric(u_pos) * radius;
             let o = center + to_env * radius + frame.s * disk.x + frame.t * disk.y;
-            let flux = e.radiance * (PI * radius * radius) / uniform_sphere_pdf();
-            Some(EmittedPhoton {
+            Some(EmittedRay {
                 ray: Ray::new(o, -to_env),
-                flux,
+                le: e.radiance,
+                n: -to_env,
+                pdf_pos: 1.0 / (PI * radius * radius),
+                pdf_dir: uniform_sphere_pdf(),
             })
         }
+    }
+}
+
+/// Densities with which `sample_le` would emit along direction `w` (unit) from a point of
+/// `light`: (pdf_pos, pdf_dir). Delta components are 0. For infinite lights `w` is the
+/// direction of travel.
+pub fn pdf_le(scene: &Scene, light: &Light, w: Vec3) -> (f32, f32) {
+    let radius = scene.bounds.bounding_sphere().1.max(1e-6);
+    match light {
+        Light::Area(a) => {
+            let cos = a.normal.dot(w);
+            let pdf_dir = if a.two_sided {
+                0.5 * cos.abs() / PI
+            } else if cos > 0.0 {
+                cos / PI
+            } else {
+                0.0
+            };
+            (1.0 / a.area, pdf_dir)
+        }
+        Light::Point(_) => (0.0, uniform_sphere_pdf()),
+        Light::Spot(s) => {
+            let inside = w.dot(s.frame.n) > s.cos_outer;
+            (0.0, if inside { uniform_cone_pdf(s.cos_outer) } else { 0.0 })
+        }
+        Light::Directional(_) => (1.0 / (PI * radius * radius), 0.0),
+        Light::Environment(_) => (1.0 / (PI * radius * radius), uniform_sphere_pdf()),
     }
 }

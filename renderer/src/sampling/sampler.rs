@@ -15,6 +15,17 @@ fn mix64(mut z: u64) -> u64 {
 /// Largest f32 below one: a primary sample is always in [0, 1).
 pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
+/// A source of uniform primary samples in [0, 1): the hashed `Sampler` here, or MMLT's
+/// primary-sample-space state (`sampling::pss`), behind which the same path-generation code
+/// runs (Kelemen et al. 2002: a path is a function of its primary samples).
+pub trait SampleSource {
+    fn get_1d(&mut self) -> f32;
+    fn get_2d(&mut self) -> Vec2 {
+        let x = self.get_1d();
+        Vec2::new(x, self.get_1d())
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Sampler {
     seed: u64,
@@ -40,15 +51,20 @@ impl Sampler {
     }
 
     pub fn get_1d(&mut self) -> f32 {
+        SampleSource::get_1d(self)
+    }
+
+    pub fn get_2d(&mut self) -> Vec2 {
+        SampleSource::get_2d(self)
+    }
+}
+
+impl SampleSource for Sampler {
+    fn get_1d(&mut self) -> f32 {
         let h = mix64(self.stream ^ self.dimension.wrapping_mul(0x9e37_79b9_7f4a_7c15));
         self.dimension += 1;
         // 24 high bits give every f32 in [0,1) with spacing 2^-24, never 1.0.
         ((h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)).min(ONE_MINUS_EPSILON)
-    }
-
-    pub fn get_2d(&mut self) -> Vec2 {
-        let x = self.get_1d();
-        Vec2::new(x, self.get_1d())
     }
 }
 

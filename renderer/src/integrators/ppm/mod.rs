@@ -433,7 +433,7 @@ impl PhotonMapper {
         let Some(emitted) = sample_le(scene, &scene.lights[light], u_pos, u_dir, u_side) else {
             return;
         };
-        let mut flux = emitted.flux / pmf;
+        let mut flux = emitted.flux() / pmf;
         let mut ray = emitted.ray;
         for depth in 0..self.settings.max_depth {
             st.rays += 1;
