@@ -104,7 +104,9 @@ impl PerspectiveCamera {
 
 impl PerspectiveCamera {
     pub fn forward(&self) -> Vec3 {
-        self.camera_to_world.transform_vector3(Vec3::NEG_Z).normalize()
+        self.camera_to_world
+            .transform_vector3(Vec3::NEG_Z)
+            .normalize()
     }
 
     /// Area of the image on the plane at distance 1 in front of the pinhole.
@@ -212,7 +214,11 @@ mod tests {
     #[test]
     fn raster_inverts_generate_ray_and_sample_wi_points_back() {
         let cam = tilted_camera();
-        for film in [Vec2::new(0.5, 0.5), Vec2::new(63.2, 10.0), Vec2::new(31.0, 47.5)] {
+        for film in [
+            Vec2::new(0.5, 0.5),
+            Vec2::new(63.2, 10.0),
+            Vec2::new(31.0, 47.5),
+        ] {
             let ray = cam.generate_ray(film);
             let back = cam.raster(ray.d).unwrap();
             assert!((back - film).length() < 1e-3, "{film} -> {back}");

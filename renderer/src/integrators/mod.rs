@@ -2,6 +2,7 @@
 //! documentation, default, range, whether it can change while running); the command line,
 //! the viewer and the EXR header all read that one description (design.md section 7).
 
+pub mod bdpt;
 pub mod path;
 pub mod ppm;
 
@@ -168,6 +169,13 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Unidirectional path tracing with next-event estimation and MIS (reference).",
         params: path::PathSettings::PARAMS,
         create: path::create,
+    },
+    IntegratorInfo {
+        name: "bdpt",
+        title: "Bidirectional path tracer",
+        description: "Veach 1997: camera and light subpaths joined by every strategy, balance-heuristic MIS.",
+        params: bdpt::BdptSettings::PARAMS,
+        create: bdpt::create,
     },
     IntegratorInfo {
         name: "ppm",

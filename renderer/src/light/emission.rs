@@ -151,7 +151,14 @@ pub fn pdf_le(scene: &Scene, light: &Light, w: Vec3) -> (f32, f32) {
         Light::Point(_) => (0.0, uniform_sphere_pdf()),
         Light::Spot(s) => {
             let inside = w.dot(s.frame.n) > s.cos_outer;
-            (0.0, if inside { uniform_cone_pdf(s.cos_outer) } else { 0.0 })
+            (
+                0.0,
+                if inside {
+                    uniform_cone_pdf(s.cos_outer)
+                } else {
+                    0.0
+                },
+            )
         }
         Light::Directional(_) => (1.0 / (PI * radius * radius), 0.0),
         Light::Environment(_) => (1.0 / (PI * radius * radius), uniform_sphere_pdf()),

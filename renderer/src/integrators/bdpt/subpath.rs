@@ -1,0 +1,175 @@
+//! Generating camera and light subpaths by random walks (pbrt-v3 section 16.3.2), recording
+//! at every vertex the forward density and, once the next direction is sampled, the reverse
+//! density of the vertex before it.
+
+use crate::camera::PerspectiveCamera;
+use crate::integrators::bdpt::vertex::{Vertex, infinite_light_density};
+use crate::integrators::scatter;
+use crate::light::emission::sample_le;
+use crate::material::TransportMode;
+use crate::sampling::sampler::SampleSource;
+use crate::scene::Scene;
+use glam::{Vec2, Vec3};
+
+/// How a walk ends besides its vertex budget.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Termination {
+    /// Russian roulette on each bounce's throughput factor, from the third vertex on (BDPT).
+    Roulette,
+    /// Exactly the budget or nothing (MMLT's chains have a fixed path length).
+    Fixed,
+}
+
+/// A camera subpath of at most `max_vertices` vertices through film position `film`.
+pub fn camera_subpath(
+    scene: &Scene,
+    camera: &PerspectiveCamera,
+    film: Vec2,
+    sampler: &mut impl SampleSource,
+    max_vertices: usize,
+    termination: Termination,
+    rays: &mut u64,
+    path: &mut Vec<Vertex>,
+) {
+    path.clear();
+    if max_vertices == 0 {
+        return;
+    }
+    let ray = camera.generate_ray(film);
+    // W_e cos / (pdf_pos pdf_dir) = 1 for the pinhole with a uniform film sample.
+    path.push(Vertex::camera(ray.o, Vec3::ONE));
+    let pdf_dir = camera.pdf_we_dir(ray.d);
+    random_walk(
+        scene,
+        ray,
+        sampler,
+        Vec3::ONE,
+        pdf_dir,
+        max_vertices,
+        TransportMode::Radiance,
+        termination,
+        rays,
+        path,
+    );
+}
+
+/// A light subpath of at most `max_vertices` vertices from a light chosen by power.
+pub fn light_subpath(
+    scene: &Scene,
+    sampler: &mut impl SampleSource,
+    max_vertices: usize,
+    termination: Termination,
+    rays: &mut u64,
+    path: &mut Vec<Vertex>,
+) {
+    path.clear();
+    if max_vertices == 0 {
+        return;
+    }
+    let ul = sampler.get_1d();
+    let (u_pos, u_dir, u_side) = (sampler.get_2d(), sampler.get_2d(), sampler.get_1d());
+    let Some((index, pmf)) = scene.light_sampler.sample(ul) else {
+        return;
+    };
+    let Some(e) = sample_le(scene, &scene.lights[index], u_pos, u_dir, u_side) else {
+        return;
+    };
+    if !(e.pdf_pos > 0.0 && e.pdf_dir > 0.0 && pmf > 0.0) {
+        return;
+    }
+    path.push(Vertex::light(
+        Some(index),
+        e.ray.o,
+        e.n,
+        e.le,
+        e.pdf_pos * pmf,
+    ));
+    let beta = e.flux() / pmf;
+    random_walk(
+        scene,
+        e.ray,
+        sampler,
+        beta,
+        e.pdf_dir,
+        max_vertices,
+        TransportMode::Importance,
+        termination,
+        rays,
+        path,
+    );
+    if scene.lights[index].is_infinite() {
+        // The first surface's density is the disc's area density projected onto it, and the
+        // light's own is directional (pbrt-v3 section 16.3.2).
+        if path.len() > 1 {
+            let cos = if path[1].is_on_surface() {
+                path[1].ng.dot(e.ray.d).abs()
+            } else {
+                1.0
+            };
+            path[1].pdf_fwd = e.pdf_pos * cos;
+        }
+        path[0].pdf_fwd = infinite_light_density(scene);
+    }
+}
+
+/// Extends `path` (which holds the subpath's first vertex) until it has `max_vertices`.
+#[allow(clippy::too_many_arguments)]
+fn random_walk(
+    scene: &Scene,
+    mut ray: crate::geometry::Ray,
+    sampler: &mut impl SampleSource,
+    mut beta: Vec3,
+    pdf_dir: f32,
+    max_vertices: usize,
+    mode: TransportMode,
+    termination: Termination,
+    rays: &mut u64,
+    path: &mut Vec<Vertex>,
+) {
+    let mut pdf_fwd = pdf_dir;
+    while path.len() < max_vertices {
+        *rays += 1;
+        let Some(si) = scene.intersect(&ray) else {
+            // A camera ray that escapes reaches the environment: a light vertex at infinity.
+            if mode == TransportMode::Radiance && scene.environment.is_some() {
+                path.push(Vertex::light(None, ray.o + ray.d, -ray.d, beta, pdf_fwd));
+            }
+            return;
+        };
+        let bsdf = scene.bsdf(&si);
+        let mut vertex = Vertex::surface(si, bsdf, beta);
+        let prev = path.last().expect("a subpath starts with its endpoint");
+        vertex.pdf_fwd = prev.convert_density(pdf_fwd, &vertex, scene);
+        path.push(vertex);
+        if path.len() >= max_vertices {
+            return;
+        }
+        let wo = si.shading.to_local(si.wo);
+        let Some(next) = scatter(&si, &bsdf, wo, sampler, mode) else {
+            return;
+        };
+        pdf_fwd = next.sample.pdf;
+        let mut pdf_rev = bsdf.pdf(next.sample.wi, wo);
+        let n = path.len();
+        if next.sample.is_delta {
+            path[n - 1].delta = true;
+            pdf_fwd = 0.0;
+            pdf_rev = 0.0;
+        }
+        let mut weight = next.weight;
+        if termination == Termination::Roulette && n >= 3 {
+            let survive = weight.max_element().min(1.0);
+            if !(sampler.get_1d() < survive) {
+                return;
+            }
+            weight /= survive;
+        }
+        beta *= weight;
+        if !beta.is_finite() || beta == Vec3::ZERO {
+            return;
+        }
+        let (head, tail) = path.split_at_mut(n - 1);
+        head[n - 2].pdf_rev = tail[0].convert_density(pdf_rev, &head[n - 2], scene);
+        ray = next.ray;
+    }
+}
