@@ -55,6 +55,10 @@ pub struct Frame {
     pub plots: Arc<Vec<PlotSeries>>,
     /// Per-pixel statistics of the integrator (shown by the viewer's pixel inspector).
     pub pixel_layers: Arc<Vec<PixelLayer>>,
+    /// Warnings and notes of the integrator about its current state (shown to the user).
+    pub messages: Arc<Vec<String>>,
+    /// The integrator's statistics as JSON, if it keeps any (MMLT's technique histogram).
+    pub statistics: Arc<Option<serde_json::Value>>,
     pub passes: u64,
     pub samples: u64,
     pub rays: u64,
@@ -126,6 +130,8 @@ impl Session {
                 image: Arc::new(Image::new(w as usize, h as usize)),
                 plots: Arc::new(Vec::new()),
                 pixel_layers: Arc::new(Vec::new()),
+                messages: Arc::new(Vec::new()),
+                statistics: Arc::new(None),
                 passes: 0,
                 samples: 0,
                 rays: 0,
@@ -246,6 +252,8 @@ struct Estimate {
     image: Arc<Image>,
     plots: Arc<Vec<PlotSeries>>,
     pixel_layers: Arc<Vec<PixelLayer>>,
+    messages: Arc<Vec<String>>,
+    statistics: Arc<Option<serde_json::Value>>,
 }
 
 impl Estimate {
@@ -254,6 +262,8 @@ impl Estimate {
             image: Arc::new(integrator.image()),
             plots: Arc::new(integrator.plots()),
             pixel_layers: Arc::new(integrator.pixel_layers()),
+            messages: Arc::new(integrator.messages()),
+            statistics: Arc::new(integrator.statistics()),
         }
     }
 }
@@ -279,6 +289,8 @@ fn run(
             image: estimate.image.clone(),
             plots: estimate.plots.clone(),
             pixel_layers: estimate.pixel_layers.clone(),
+            messages: estimate.messages.clone(),
+            statistics: estimate.statistics.clone(),
             passes,
             samples: totals.samples,
             rays: totals.rays,

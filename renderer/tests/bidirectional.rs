@@ -235,3 +235,38 @@ fn bdpt_agrees_with_the_path_tracer_on_the_cornell_boxes() {
         );
     }
 }
+#[test]
+fn scratch_mmlt() {
+    for seed in 1..4 {
+        let p: ParamValues = [
+            ("bootstrap", 100000.0),
+            ("chains", 1000.0),
+            ("max_depth", 10.0),
+        ]
+        .iter()
+        .map(|(k, v)| (k.to_string(), *v))
+        .collect();
+        let session = Session::start(SessionConfig {
+            scene: Arc::new(Scene::build(cornell_box(false)).unwrap()),
+            integrator: "mmlt".into(),
+            params: p,
+            width: 32,
+            height: 32,
+            seed,
+            threads: 0,
+            max_passes: Some(512),
+            time_limit: None,
+            on_frame: None,
+        })
+        .unwrap();
+        let f = session.wait();
+        let st = (*f.statistics).clone().unwrap();
+        eprintln!(
+            "mmlt: cornell {:.5} b {} se {} per length {}",
+            mean(&f.image),
+            st["normalisation_b"],
+            st["normalisation_standard_error"],
+            st["bootstrap_b_per_length"]
+        );
+    }
+}

@@ -3,6 +3,7 @@
 //! the viewer and the EXR header all read that one description (design.md section 7).
 
 pub mod bdpt;
+pub mod mmlt;
 pub mod path;
 pub mod ppm;
 
@@ -127,6 +128,14 @@ pub trait Integrator: Send {
     fn pixel_layers(&self) -> Vec<PixelLayer> {
         Vec::new()
     }
+    /// Warnings about the current state or parameters, for the user.
+    fn messages(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// Statistics worth saving beside the image (`caustica render --stats`).
+    fn statistics(&self) -> Option<serde_json::Value> {
+        None
+    }
 }
 
 /// How a plot series is drawn.
@@ -176,6 +185,13 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Veach 1997: camera and light subpaths joined by every strategy, balance-heuristic MIS.",
         params: bdpt::BdptSettings::PARAMS,
         create: bdpt::create,
+    },
+    IntegratorInfo {
+        name: "mmlt",
+        title: "Multiplexed Metropolis light transport",
+        description: "Hachisuka et al. 2014: Metropolis chains over primary samples and bidirectional techniques.",
+        params: mmlt::MmltSettings::PARAMS,
+        create: mmlt::create,
     },
     IntegratorInfo {
         name: "ppm",

@@ -2,6 +2,7 @@
 //! deterministic sampler every random number of the renderer comes from.
 
 pub mod distribution;
+pub mod pss;
 pub mod sampler;
 pub mod warp;
 

@@ -1,0 +1,416 @@
+//! Multiplexed Metropolis light transport (Hachisuka, Kaplanyan & Dachsbacher 2014, "primary
+//! space serial tempering"): Metropolis chains in primary sample space over bidirectional
+//! paths of a fixed length, whose state also selects the technique (s, t) that maps it to a
+//! path, targeting the MIS-weighted contribution, so a chain settles on the techniques that
+//! suit each region (design.md section 5).
+//!
+//! A pass is width x height steps shared equally among the chains; chains run in parallel
+//! and their splats are merged in chain order. Every image is normalised (pbrt-v3 section
+//! 16.4.4: b over the steps per pixel), per path length: a pass's splats from a chain of
+//! length k carry weight b_k / c_k, c_k the number of chains of that length, so the image
+//! does not depend on how the random seeding happened to split the chains between lengths
+//! (with one b for all, length k's image would be scaled by (c_k / C) / (b_k / b), a few
+//! percent off for a thousand chains). b_k starts as the bootstrap's mean and is refined
+//! after every pass with the target values of the pass's large-step proposals, which are
+//! independent uniform samples (Kelemen et al. 2002): the bootstrap's error (about 2 % with
+//! 10^5 samples where a small light is seen directly) then fades as the run goes on.
+
+pub mod bootstrap;
+pub mod chain;
+pub mod histogram;
+pub mod path_sample;
+
+use crate::image::Image;
+use crate::integrators::{
+    Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PlotKind, PlotSeries, RenderContext,
+};
+use crate::sampling::sampler::Sampler;
+use chain::{Chain, ChainOutput};
+use glam::DVec3;
+use histogram::TechniqueHistogram;
+use path_sample::Subpaths;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MmltSettings {
+    pub large_step_prob: f64,
+    pub sigma: f64,
+    /// Bootstrap samples per path length.
+    pub bootstrap: u64,
+    pub chains: u64,
+    /// Longest path, in bounces.
+    pub max_depth: u32,
+}
+
+impl MmltSettings {
+    pub const PARAMS: &'static [ParamSpec] = &[
+        ParamSpec {
+            name: "large_step",
+            doc: "Probability of a large step (every coordinate drawn anew). 1 is an independent sampler; 0 is valid but chains can stick.",
+            default: 0.3,
+            min: 0.0,
+            max: 1.0,
+            integer: false,
+            live: true,
+        },
+        ParamSpec {
+            name: "sigma",
+            doc: "Standard deviation of a small step in primary sample space (Kelemen et al. 2002).",
+            default: 0.01,
+            min: 1e-5,
+            max: 1.0,
+            integer: false,
+            live: true,
+        },
+        ParamSpec {
+            name: "bootstrap",
+            doc: "Independent samples per path length that estimate the normalisation and seed the chains.",
+            default: 100_000.0,
+            min: 1.0,
+            max: 1e8,
+            integer: true,
+            live: false,
+        },
+        ParamSpec {
+            name: "chains",
+            doc: "Number of Markov chains.",
+            default: 1000.0,
+            min: 1.0,
+            max: 1e6,
+            integer: true,
+            live: false,
+        },
+        ParamSpec {
+            name: "max_depth",
+            doc: "Longest path, in bounces; each length has its own chains.",
+            default: 10.0,
+            min: 0.0,
+            max: 64.0,
+            integer: true,
+            live: false,
+        },
+    ];
+
+    pub fn from_params(p: &ParamValues) -> Self {
+        let get = |name: &str| {
+            p.get(name).copied().unwrap_or_else(|| {
+                Self::PARAMS
+                    .iter()
+                    .find(|s| s.name == name)
+                    .map_or(0.0, |s| s.default)
+            })
+        };
+        MmltSettings {
+            large_step_prob: get("large_step").clamp(0.0, 1.0),
+            sigma: get("sigma").clamp(1e-5, 1.0),
+            bootstrap: get("bootstrap").max(1.0) as u64,
+            chains: get("chains").max(1.0) as u64,
+            max_depth: get("max_depth").clamp(0.0, 64.0) as u32,
+        }
+    }
+}
+
+impl Default for MmltSettings {
+    fn default() -> Self {
+        Self::from_params(&ParamValues::new())
+    }
+}
+
+pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
+    Box::new(MmltIntegrator::new(ctx, MmltSettings::from_params(params)))
+}
+
+const CHAIN_SEEDING: u64 = 0x3e7a_0c4a_1a55_0001;
+const CHAIN_KEYS: u64 = 1 << 62;
+
+enum Phase {
+    /// The bootstrap has not run yet.
+    Starting,
+    /// Nothing reaches the camera: every bootstrap sample was black.
+    Black,
+    Running {
+        chains: Vec<Chain>,
+        /// c_k: chains of each length.
+        chains_per_length: Vec<u64>,
+        /// Sum and count of the target values behind each b_k.
+        b_sum: Vec<f64>,
+        b_count: Vec<u64>,
+    },
+}
+
+pub struct MmltIntegrator {
+    ctx: RenderContext,
+    settings: MmltSettings,
+    phase: Phase,
+    splats: Vec<DVec3>,
+    steps: u64,
+    steps_per_chain: u64,
+    /// Share of b in path lengths that got no chain (lost to the image).
+    unsampled_share: f64,
+    b_standard_error: f64,
+    histogram: TechniqueHistogram,
+    bootstrap_per_length: Vec<f64>,
+}
+
+impl MmltIntegrator {
+    pub fn new(ctx: RenderContext, settings: MmltSettings) -> Self {
+        let pixels = (ctx.camera.width * ctx.camera.height) as usize;
+        MmltIntegrator {
+            ctx,
+            settings,
+            phase: Phase::Starting,
+            splats: vec![DVec3::ZERO; pixels],
+            steps: 0,
+            steps_per_chain: 0,
+            unsampled_share: 0.0,
+            b_standard_error: 0.0,
+            histogram: TechniqueHistogram::new(settings.max_depth as usize),
+            bootstrap_per_length: Vec::new(),
+        }
+    }
+
+    pub fn histogram(&self) -> &TechniqueHistogram {
+        &self.histogram
+    }
+
+    /// The normalisation b (None before the bootstrap).
+    pub fn normalisation(&self) -> Option<f64> {
+        match &self.phase {
+            Phase::Starting => None,
+            Phase::Black => Some(0.0),
+            Phase::Running { b_sum, b_count, .. } => Some(
+                b_sum
+                    .iter()
+                    .zip(b_count)
+                    .map(|(s, &n)| s / n.max(1) as f64)
+                    .sum(),
+            ),
+        }
+    }
+
+    fn start(&mut self, stats: &mut PassStats) {
+        let (scene, camera, seed) = (&*self.ctx.scene, &self.ctx.camera, self.ctx.seed);
+        let max_depth = self.settings.max_depth as usize;
+        let boot = bootstrap::run(
+            scene,
+            camera,
+            seed,
+            self.settings.bootstrap as usize,
+            max_depth,
+        );
+        stats.rays += boot.rays;
+        stats.dropped += boot.dropped;
+        stats.samples += self.settings.bootstrap * (max_depth as u64 + 1);
+        self.bootstrap_per_length = boot.per_length.clone();
+        let Some(seeds) = boot.seeds else {
+            self.phase = Phase::Black;
+            return;
+        };
+        let lengths = max_depth + 1;
+        let chains: Vec<(Chain, u64)> = (0..self.settings.chains)
+            .into_par_iter()
+            .map_init(Subpaths::default, |scratch, c| {
+                let mut pick = Sampler::new(seed ^ CHAIN_SEEDING);
+                pick.start_pixel_sample(c, 0);
+                let (index, _) = seeds.sample(pick.get_1d()).expect("non-empty");
+                let (i, k) = (index / lengths, index % lengths);
+                let mut rays = 0;
+                let chain = Chain::start(
+                    scene,
+                    camera,
+                    seed,
+                    bootstrap::bootstrap_key(i, k, max_depth),
+                    CHAIN_KEYS + c,
+                    k,
+                    scratch,
+                    &mut rays,
+                );
+                (chain, rays)
+            })
+            .collect();
+        stats.rays += chains.iter().map(|c| c.1).sum::<u64>();
+        let mut per_length = vec![0u64; lengths];
+        for (chain, _) in &chains {
+            per_length[chain.k] += 1;
+        }
+        self.unsampled_share = (0..lengths)
+            .filter(|&k| per_length[k] == 0)
+            .map(|k| boot.per_length[k])
+            .sum::<f64>()
+            / boot.b;
+        self.b_standard_error = boot.standard_error;
+        let samples = self.settings.bootstrap;
+        self.phase = Phase::Running {
+            chains: chains.into_iter().map(|c| c.0).collect(),
+            chains_per_length: per_length,
+            b_sum: boot.per_length.iter().map(|b| b * samples as f64).collect(),
+            b_count: vec![samples; lengths],
+        };
+    }
+}
+
+impl Integrator for MmltIntegrator {
+    fn render_pass(&mut self, _pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
+        let mut stats = PassStats::default();
+        if matches!(self.phase, Phase::Starting) {
+            self.start(&mut stats);
+        }
+        let Phase::Running {
+            chains,
+            chains_per_length,
+            b_sum,
+            b_count,
+        } = &mut self.phase
+        else {
+            return Ok(stats);
+        };
+        let (scene, camera) = (&*self.ctx.scene, &self.ctx.camera);
+        let pixels = (camera.width * camera.height) as u64;
+        let n = chains.len() as u64;
+        let steps = pixels.div_ceil(n);
+        let (p_large, sigma) = (
+            self.settings.large_step_prob as f32,
+            self.settings.sigma as f32,
+        );
+        let max_depth = self.settings.max_depth as usize;
+        let results: Vec<(ChainOutput, TechniqueHistogram)> = chains
+            .par_iter_mut()
+            .map_init(Subpaths::default, |scratch, chain| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Err(Cancelled);
+                }
+                let mut out = ChainOutput::default();
+                let mut histogram = TechniqueHistogram::new(max_depth);
+                chain.run(
+                    scene,
+                    camera,
+                    steps,
+                    p_large,
+                    sigma,
+                    scratch,
+                    &mut histogram,
+                    &mut out,
+                );
+                Ok((out, histogram))
+            })
+            .collect::<Result<_, _>>()?;
+        // This pass's weights come from b_k as it was before the pass.
+        let weights: Vec<f64> = (0..b_sum.len())
+            .map(|k| b_sum[k] / b_count[k] as f64 / chains_per_length[k].max(1) as f64)
+            .collect();
+        for ((out, histogram), chain) in results.into_iter().zip(chains.iter()) {
+            let weight = weights[chain.k];
+            for (i, v) in out.splats {
+                self.splats[i] += v.as_dvec3() * weight;
+            }
+            b_sum[chain.k] += out.large_step_sum;
+            b_count[chain.k] += out.large_steps;
+            self.histogram.merge(&histogram);
+            self.steps += steps;
+            stats.samples += steps;
+            stats.rays += out.rays;
+            stats.dropped += out.dropped;
+        }
+        self.steps_per_chain += steps;
+        Ok(stats)
+    }
+
+    fn image(&self) -> Image {
+        let (w, h) = (
+            self.ctx.camera.width as usize,
+            self.ctx.camera.height as usize,
+        );
+        let mut img = Image::new(w, h);
+        if matches!(self.phase, Phase::Running { .. }) && self.steps_per_chain > 0 {
+            // Splats carry b_k / c_k; the steps of length k are c_k times the steps per chain.
+            let scale = (w * h) as f64 / self.steps_per_chain as f64;
+            for (p, s) in img.pixels.iter_mut().zip(&self.splats) {
+                *p = crate::film::sanitize((*s * scale).as_vec3()).unwrap_or_default();
+            }
+        }
+        img
+    }
+
+    fn set_live_param(&mut self, name: &str, value: f64) -> bool {
+        match name {
+            "large_step" => self.settings.large_step_prob = value.clamp(0.0, 1.0),
+            "sigma" => self.settings.sigma = value.clamp(1e-5, 1.0),
+            _ => return false,
+        }
+        true
+    }
+
+    fn plots(&self) -> Vec<PlotSeries> {
+        let mut plots = Vec::new();
+        for (k, l) in self.histogram.lengths.iter().enumerate() {
+            let total: u64 = l.steps_in_technique.iter().sum();
+            if total == 0 {
+                continue;
+            }
+            plots.push(PlotSeries {
+                plot: "Techniques".into(),
+                name: format!("k = {k}"),
+                kind: PlotKind::Bars,
+                x_label: "s (light vertices)".into(),
+                y_label: "share of steps".into(),
+                points: l
+                    .steps_in_technique
+                    .iter()
+                    .enumerate()
+                    .map(|(s, &c)| [s as f64, c as f64 / total as f64])
+                    .collect(),
+            });
+        }
+        let rates = |name: &str, f: fn(&histogram::LengthStats) -> f64| PlotSeries {
+            plot: "Acceptance".into(),
+            name: name.into(),
+            kind: PlotKind::Line,
+            x_label: "path length k".into(),
+            y_label: "acceptance rate".into(),
+            points: self
+                .histogram
+                .lengths
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| l.large.proposed + l.small.proposed > 0)
+                .map(|(k, l)| [k as f64, f(l)])
+                .collect(),
+        };
+        if self.steps > 0 {
+            plots.push(rates("large steps", |l| l.large.rate()));
+            plots.push(rates("small steps", |l| l.small.rate()));
+            plots.push(rates("technique changes", |l| l.technique_change.rate()));
+        }
+        plots
+    }
+
+    fn messages(&self) -> Vec<String> {
+        let mut m = Vec::new();
+        if matches!(self.phase, Phase::Black) {
+            m.push("Nothing reaches the camera: every bootstrap path was black.".into());
+        }
+        if self.unsampled_share > 0.0 {
+            m.push(format!(
+                "{:.2} % of the image's energy is in path lengths no chain samples: use more chains.",
+                100.0 * self.unsampled_share
+            ));
+        }
+        if self.settings.large_step_prob == 0.0 {
+            m.push(
+                "Large-step probability 0: chains never jump and can stick in one region.".into(),
+            );
+        }
+        m
+    }
+
+    fn statistics(&self) -> Option<serde_json::Value> {
+        let mut v = self.histogram.to_json();
+        v["normalisation_b"] = serde_json::json!(self.normalisation());
+        v["bootstrap_b_per_length"] = serde_json::json!(self.bootstrap_per_length);
+        v["normalisation_standard_error"] = serde_json::json!(self.b_standard_error);
+        v["share_of_b_without_chains"] = serde_json::json!(self.unsampled_share);
+        v["chains"] = serde_json::json!(self.settings.chains);
+        Some(v)
+    }
+}

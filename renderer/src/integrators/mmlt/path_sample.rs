@@ -1,0 +1,127 @@
+//! The function a Metropolis chain samples (Hachisuka, Kaplanyan & Dachsbacher 2014,
+//! section 4): a point of primary sample space and a path length k map to one bidirectional
+//! technique (s, t), chosen by the connection stream's first number, and its MIS-weighted
+//! contribution times the number of techniques n = k + 2 (their eq. 7: the techniques'
+//! weights sum to one, so the expectation over the technique number is the full
+//! contribution). Subpaths have exactly the lengths the technique needs, or contribute
+//! nothing.
+//!
+//! Deviation: for k = 0 only (s, t) = (0, 2) is used (n = 1): (1, 1) would connect a light
+//! point to the pinhole directly, which BDPT never evaluates, and (2, 0) cannot hit a pinhole.
+
+use crate::camera::PerspectiveCamera;
+use crate::geometry::luminance;
+use crate::integrators::bdpt::connect::connect;
+use crate::integrators::bdpt::subpath::{Termination, camera_subpath, light_subpath};
+use crate::integrators::bdpt::vertex::Vertex;
+use crate::sampling::pss::{CAMERA_STREAM, CONNECTION_STREAM, LIGHT_STREAM, PssSampler};
+use crate::sampling::sampler::SampleSource;
+use crate::scene::Scene;
+use glam::{Vec2, Vec3};
+
+/// One evaluation: the technique chosen, the contribution and where it lands on the film.
+#[derive(Clone, Copy, Debug)]
+pub struct PathSample {
+    pub s: usize,
+    pub l: Vec3,
+    pub raster: Vec2,
+}
+
+impl PathSample {
+    /// The chain's target: the contribution's luminance (zero for invalid values, which the
+    /// caller counts as dropped).
+    pub fn luminance(&self) -> f32 {
+        let y = luminance(self.l);
+        if y.is_finite() && y > 0.0 && self.l.min_element() >= 0.0 {
+            y
+        } else {
+            0.0
+        }
+    }
+
+    pub fn is_valid(&self) -> bool {
+        self.l.is_finite() && self.l.min_element() >= 0.0
+    }
+}
+
+/// Scratch space for the subpaths, reused between evaluations.
+#[derive(Default)]
+pub struct Subpaths {
+    camera: Vec<Vertex>,
+    light: Vec<Vertex>,
+}
+
+/// Number of techniques for path length `k`.
+pub fn technique_count(k: usize) -> usize {
+    if k == 0 { 1 } else { k + 2 }
+}
+
+/// Evaluates the state of `sampler` as a path of `k` bounces.
+pub fn evaluate(
+    scene: &Scene,
+    camera: &PerspectiveCamera,
+    sampler: &mut PssSampler,
+    k: usize,
+    scratch: &mut Subpaths,
+    rays: &mut u64,
+) -> PathSample {
+    sampler.start_stream(CONNECTION_STREAM, 0);
+    let n = technique_count(k);
+    let s = if k == 0 {
+        0
+    } else {
+        ((sampler.get_1d() * n as f32) as usize).min(n - 1)
+    };
+    let t = k + 2 - s;
+    sampler.start_stream(CAMERA_STREAM, 0);
+    let film = sampler.get_2d() * Vec2::new(camera.width as f32, camera.height as f32);
+    let zero = PathSample {
+        s,
+        l: Vec3::ZERO,
+        raster: film,
+    };
+    camera_subpath(
+        scene,
+        camera,
+        film,
+        sampler,
+        t,
+        Termination::Fixed,
+        rays,
+        &mut scratch.camera,
+    );
+    if scratch.camera.len() != t {
+        return zero;
+    }
+    sampler.start_stream(LIGHT_STREAM, 0);
+    light_subpath(
+        scene,
+        sampler,
+        s,
+        Termination::Fixed,
+        rays,
+        &mut scratch.light,
+    );
+    if scratch.light.len() != s {
+        return zero;
+    }
+    sampler.start_stream(CONNECTION_STREAM, 1);
+    match connect(
+        scene,
+        camera,
+        &scratch.light,
+        &scratch.camera,
+        s,
+        t,
+        sampler,
+        rays,
+        true,
+    ) {
+        Some(c) => PathSample {
+            s,
+            l: c.l * (c.mis * n as f32),
+            raster: c.raster.unwrap_or(film),
+        },
+        None => zero,
+    }
+}
