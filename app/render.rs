@@ -19,7 +19,8 @@ pub struct RenderArgs {
     /// Output image: .exr (linear float32 RGB with metadata) or .png (tone-mapped sRGB).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Integrator: pt (path tracer), ppm, sppm or pppm (progressive photon mapping).
+    /// Integrator: pt (path tracer), bdpt (bidirectional), mmlt (multiplexed Metropolis), ppm,
+    /// sppm or pppm (progressive photon mapping).
     #[arg(long, default_value = "pt")]
     pub integrator: String,
     /// Samples per pixel (one per pass); the default when --time is not given is 16.
@@ -52,6 +53,22 @@ pub struct RenderArgs {
     /// Photon mapping: photons per pass (default 100000).
     #[arg(long)]
     pub photons: Option<u64>,
+    /// MMLT: probability of a large step, in [0, 1] (default 0.3).
+    #[arg(long)]
+    pub large_step: Option<f64>,
+    /// MMLT: standard deviation of a small step in primary sample space (default 0.01).
+    #[arg(long)]
+    pub sigma: Option<f64>,
+    /// MMLT: bootstrap samples per path length (default 100000).
+    #[arg(long)]
+    pub bootstrap: Option<u64>,
+    /// MMLT: number of Markov chains (default 1000).
+    #[arg(long)]
+    pub chains: Option<u64>,
+    /// Write the run's statistics as JSON (counters; for MMLT the technique histogram and
+    /// acceptance rates per path length).
+    #[arg(long, value_name = "FILE.json")]
+    pub stats: Option<PathBuf>,
     /// Exposure in stops applied to PNG output.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
@@ -132,6 +149,10 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         ("alpha", args.alpha),
         ("radius", args.radius),
         ("photons", args.photons.map(|p| p as f64)),
+        ("large_step", args.large_step),
+        ("sigma", args.sigma),
+        ("bootstrap", args.bootstrap.map(|b| b as f64)),
+        ("chains", args.chains.map(|c| c as f64)),
     ];
     for (name, value) in flags {
         if let Some(v) = value {
@@ -216,6 +237,9 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let threads = session.threads();
     let frame = session.wait();
     bar.finish_and_clear();
+    for m in frame.messages.iter() {
+        eprintln!("note: {m}");
+    }
 
     let secs = frame.elapsed.as_secs_f64().max(1e-9);
     let metadata = BTreeMap::from([
@@ -235,6 +259,23 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         Format::Png => write_png(&args.output, &frame.image, args.exposure),
     }
     .with_context(|| "cannot write the image".to_string())?;
+    if let Some(path) = &args.stats {
+        let stats = serde_json::json!({
+            "integrator": info.name,
+            "parameters": params,
+            "passes": frame.passes,
+            "samples": frame.samples,
+            "rays": frame.rays,
+            "dropped_samples": frame.dropped,
+            "elapsed_seconds": secs,
+            "threads": threads,
+            "messages": *frame.messages,
+            "integrator_statistics": *frame.statistics,
+        });
+        let text = serde_json::to_string_pretty(&stats).unwrap_or_default();
+        std::fs::write(path, text + "\n")
+            .with_context(|| format!("{}: cannot write the statistics", path.display()))?;
+    }
     eprintln!(
         "{} passes, {} samples in {:.2} s on {} threads: {:.2} Mrays/s, {} dropped samples -> {}",
         frame.passes,

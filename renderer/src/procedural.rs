@@ -362,6 +362,7 @@ pub fn bundled_assets() -> Vec<(&'static str, String)> {
         ("cornell-box.gltf", to_gltf_string(&cornell_box(false))),
         ("cornell-glass.gltf", to_gltf_string(&cornell_box(true))),
         ("caustic-pool.gltf", to_gltf_string(&caustic_pool())),
+        ("door.gltf", to_gltf_string(&door())),
     ]
 }
 
@@ -513,6 +514,94 @@ pub fn caustic_pool() -> SceneDescription {
         ],
         materials: vec![floor, glass, light],
         camera: Some(camera_looking(v(0.0, 2.4, 3.4), v(0.0, 0.2, 0.0), 45.0)),
+        ..Default::default()
+    }
+}
+
+/// Veach's door scene, in our words: two rooms joined by a doorway whose door is shut but for
+/// a 6 cm slit; the only light hangs under the ceiling of the far room. Everything the camera
+/// sees in the near room is lit through the slit, mostly after bounces in the far room, on a
+/// glossy floor and a glossy metal sphere: next-event estimation from the near room finds the
+/// light almost always occluded, so a path tracer's image is mostly noise, while Metropolis
+/// chains keep the paths that pass the slit once they have found them.
+pub fn door() -> SceneDescription {
+    let white = Material {
+        name: "wall".into(),
+        ..Material::diffuse(Vec3::new(0.7, 0.7, 0.68))
+    };
+    let floor = Material {
+        name: "glossy floor".into(),
+        base_color: Vec3::new(0.55, 0.45, 0.35),
+        metallic: 0.0,
+        roughness: 0.3,
+        ..Default::default()
+    };
+    let metal = Material {
+        name: "glossy metal".into(),
+        base_color: Vec3::new(0.9, 0.85, 0.7),
+        metallic: 1.0,
+        roughness: 0.2,
+        ..Default::default()
+    };
+    let door_material = Material {
+        name: "door".into(),
+        ..Material::diffuse(Vec3::new(0.45, 0.3, 0.2))
+    };
+    let light = Material {
+        name: "light".into(),
+        emission: Vec3::new(400.0, 360.0, 300.0),
+        ..Material::diffuse(Vec3::ZERO)
+    };
+    let v = Vec3::new;
+    // An axis-aligned slab from `lo` to `hi`.
+    let slab = |name: &str, lo: Vec3, hi: Vec3, material: u32| {
+        cuboid(
+            name,
+            Affine3A::from_scale_rotation_translation(hi - lo, Quat::IDENTITY, 0.5 * (lo + hi)),
+            material,
+        )
+    };
+    let (x0, x1, xw, z, h) = (-2.0, 5.0, 2.0, 2.0, 2.5);
+    let t = 0.1;
+    let meshes = vec![
+        slab("floor", v(x0 - t, -t, -z - t), v(x1 + t, 0.0, z + t), 1),
+        slab("ceiling", v(x0 - t, h, -z - t), v(x1 + t, h + t, z + t), 0),
+        slab("wall -z", v(x0 - t, 0.0, -z - t), v(x1 + t, h, -z), 0),
+        slab("wall +z", v(x0 - t, 0.0, z), v(x1 + t, h, z + t), 0),
+        slab("wall near end", v(x0 - t, 0.0, -z), v(x0, h, z), 0),
+        slab("wall far end", v(x1, 0.0, -z), v(x1 + t, h, z), 0),
+        // The dividing wall with a doorway in z [-0.5, 0.5], 2 m high.
+        slab("dividing wall -z", v(xw, 0.0, -z), v(xw + t, h, -0.5), 0),
+        slab("dividing wall +z", v(xw, 0.0, 0.5), v(xw + t, h, z), 0),
+        slab("lintel", v(xw, 2.0, -0.5), v(xw + t, h, 0.5), 0),
+        // The door fills the doorway but for a 6 cm slit along its free edge.
+        slab("door", v(xw + 0.02, 0.0, -0.5), v(xw + 0.07, 2.0, 0.44), 3),
+        uv_sphere("metal sphere", v(0.3, 0.45, -0.9), 0.45, 48, 24, false, 2),
+        cuboid(
+            "block",
+            Affine3A::from_scale_rotation_translation(
+                v(0.6, 0.9, 0.6),
+                Quat::from_rotation_y(0.5),
+                v(-0.6, 0.45, 0.9),
+            ),
+            0,
+        ),
+        quad(
+            "light",
+            [
+                v(3.8, h - 0.01, -0.4),
+                v(4.6, h - 0.01, -0.4),
+                v(4.6, h - 0.01, 0.4),
+                v(3.8, h - 0.01, 0.4),
+            ],
+            4,
+        ),
+    ];
+    SceneDescription {
+        name: "door".into(),
+        meshes,
+        materials: vec![white, floor, metal, door_material, light],
+        camera: Some(camera_looking(v(-1.8, 1.5, 1.7), v(1.6, 0.5, -0.3), 60.0)),
         ..Default::default()
     }
 }
