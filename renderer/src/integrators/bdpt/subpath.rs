@@ -21,6 +21,7 @@ pub enum Termination {
 }
 
 /// A camera subpath of at most `max_vertices` vertices through film position `film`.
+#[allow(clippy::too_many_arguments)]
 pub fn camera_subpath(
     scene: &Scene,
     camera: &PerspectiveCamera,

@@ -150,6 +150,11 @@ impl Vertex {
         if wi == Vec3::ZERO {
             return Vec3::ZERO;
         }
+        // A connection along the surface itself (two points of one facet) would pass the side
+        // tests by rounding and carry light through closed shells; its true weight is nil.
+        if wi.dot(si.n).abs() < 1e-5 {
+            return Vec3::ZERO;
+        }
         let wo_local = si.shading.to_local(si.wo);
         let wi_local = si.shading.to_local(wi);
         if !si.consistent(wo_local, wi_local, wi) {

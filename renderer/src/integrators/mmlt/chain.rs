@@ -63,6 +63,11 @@ impl Chain {
         }
     }
 
+    /// The target value of the current state.
+    pub fn current_luminance(&self) -> f32 {
+        self.current_y
+    }
+
     /// `steps` Metropolis steps with the given large-step probability and sigma.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
@@ -88,9 +93,8 @@ impl Chain {
                 scratch,
                 &mut out.rays,
             );
-            if !proposed.is_valid() {
+            if proposed.drop_if_invalid() {
                 out.dropped += 1;
-                proposed.l = Vec3::ZERO;
             }
             let y = proposed.luminance();
             if self.sampler.is_large_step() {

@@ -42,6 +42,46 @@ impl PathSample {
     pub fn is_valid(&self) -> bool {
         self.l.is_finite() && self.l.min_element() >= 0.0
     }
+
+    /// Replaces a NaN, infinite or negative contribution by zero (a zero-target state the
+    /// chain will leave); true if it did, for the dropped count.
+    pub fn drop_if_invalid(&mut self) -> bool {
+        if self.is_valid() {
+            return false;
+        }
+        self.l = Vec3::ZERO;
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invalid_contributions_are_dropped_and_have_zero_target() {
+        for l in [
+            Vec3::new(f32::NAN, 1.0, 1.0),
+            Vec3::new(1.0, f32::INFINITY, 1.0),
+            Vec3::new(1.0, 1.0, -1e-3),
+        ] {
+            let mut s = PathSample {
+                s: 1,
+                l,
+                raster: Vec2::ZERO,
+            };
+            assert_eq!(s.luminance(), 0.0);
+            assert!(s.drop_if_invalid());
+            assert_eq!(s.l, Vec3::ZERO);
+        }
+        let mut ok = PathSample {
+            s: 0,
+            l: Vec3::ONE,
+            raster: Vec2::ZERO,
+        };
+        assert!(!ok.drop_if_invalid());
+        assert!((ok.luminance() - 1.0).abs() < 1e-6);
+    }
 }
 
 /// Scratch space for the subpaths, reused between evaluations.
