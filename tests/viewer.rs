@@ -432,3 +432,68 @@ fn photon_mapping_in_the_viewer_with_live_alpha_radius_plot_and_inspector() {
     assert_eq!(names, ["radius", "N", "photons"]);
     h.get_by_label("Radius");
 }
+
+#[test]
+fn mmlt_in_the_viewer_with_live_large_step_histogram_and_warning() {
+    let mut h = harness(Some(asset("cornell-box.gltf")));
+    step_until(&mut h, "the first frames", rendering);
+    h.state_mut().apply(Command::SetIntegrator("mmlt".into()));
+    h.state_mut()
+        .apply(Command::SetParam("bootstrap".into(), 2000.0));
+    h.state_mut().apply(Command::SetParam("chains".into(), 64.0));
+    step_until(&mut h, "MMLT frames", rendering);
+    let sessions = h.state().controller.sessions_started;
+    let technique_plot = |app: &ViewerApp| {
+        app.controller.frame().map(|f| {
+            f.plots
+                .iter()
+                .filter(|p| p.plot == "Techniques")
+                .map(|p| (p.name.clone(), p.points.clone()))
+                .collect::<Vec<_>>()
+        })
+    };
+    let before = technique_plot(h.state()).unwrap();
+    assert!(!before.is_empty(), "the technique histogram is plotted");
+    h.get_by_label("Techniques");
+
+    // p_large is live: moving it to 0 changes the running chains without a restart, the
+    // histogram keeps changing, and the panel warns that chains can stick.
+    h.query_all_by_label("large_step")
+        .next()
+        .expect("the large_step slider")
+        .set_value_accesskit(0.0);
+    h.run_steps(2);
+    assert_eq!(
+        h.state().controller.sessions_started,
+        sessions,
+        "large_step must not restart the render"
+    );
+    assert_eq!(
+        h.state().controller.session().unwrap().params()["large_step"],
+        0.0
+    );
+    step_until(&mut h, "the histogram to change", |a| {
+        technique_plot(a).is_some_and(|p| p != before)
+    });
+    step_until(&mut h, "the warning", |a| {
+        a.controller
+            .frame()
+            .is_some_and(|f| f.messages.iter().any(|m| m.contains("stick")))
+    });
+    h.run_steps(2);
+    h.get_by_label_contains("chains never jump");
+
+    // A restart resets the histogram.
+    h.state_mut().apply(Command::SetParam("chains".into(), 32.0));
+    assert_eq!(h.state().controller.sessions_started, sessions + 1);
+    step_until(&mut h, "frames after the restart", rendering);
+    let steps: u64 = h
+        .state()
+        .controller
+        .frame()
+        .and_then(|f| (*f.statistics).clone())
+        .and_then(|s| s["total_steps"].as_u64())
+        .unwrap();
+    let frame = h.state().controller.frame().unwrap();
+    assert!(steps <= frame.samples, "the histogram restarted with the session");
+}

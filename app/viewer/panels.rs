@@ -135,6 +135,12 @@ pub fn side_panel(
                 param_widget(ui, spec, value, &mut out);
             }
         }
+        // What the integrator says of its state (a sticking chain, a black scene).
+        if let Some(f) = status.frame {
+            for m in f.messages.iter() {
+                ui.colored_label(ui.visuals().warn_fg_color, format!("warning: {m}"));
+            }
+        }
         ui.horizontal(|ui| {
             let (mut w, mut h) = (settings.width, settings.height);
             let rw = ui

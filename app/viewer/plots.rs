@@ -84,7 +84,30 @@ pub fn plots_panel(
 }
 
 fn integrator_plot(ui: &mut egui::Ui, height: f32, title: &str, all: &[PlotSeries]) {
-    let series: Vec<&PlotSeries> = all.iter().filter(|s| s.plot == title).collect();
+    let mut series: Vec<&PlotSeries> = all.iter().filter(|s| s.plot == title).collect();
+    // Several bar series (MMLT's technique shares, one per path length) overlap: show the
+    // one the user picks, remembered in egui's memory for this plot.
+    let bars: Vec<&PlotSeries> = series
+        .iter()
+        .copied()
+        .filter(|s| s.kind == PlotKind::Bars)
+        .collect();
+    if bars.len() > 1 {
+        let id = ui.id().with(("shown series", title));
+        let mut chosen = ui
+            .data(|d| d.get_temp::<String>(id))
+            .filter(|c| bars.iter().any(|s| &s.name == c))
+            .unwrap_or_else(|| bars[0].name.clone());
+        egui::ComboBox::from_id_salt(id)
+            .selected_text(&chosen)
+            .show_ui(ui, |ui| {
+                for s in &bars {
+                    ui.selectable_value(&mut chosen, s.name.clone(), &s.name);
+                }
+            });
+        ui.data_mut(|d| d.insert_temp(id, chosen.clone()));
+        series.retain(|s| s.kind != PlotKind::Bars || s.name == chosen);
+    }
     let Some(first) = series.first() else { return };
     Plot::new(("integrator plot", title))
         .height(height)
