@@ -224,6 +224,14 @@ fn help_documents_every_option() {
         "--seed",
         "--threads",
         "--max-depth",
+        "--alpha",
+        "--radius",
+        "--photons",
+        "--large-step",
+        "--sigma",
+        "--bootstrap",
+        "--chains",
+        "--stats",
     ] {
         assert!(help.contains(option), "help lacks {option}");
     }
@@ -250,4 +258,85 @@ fn the_viewer_without_a_display_fails_clearly() {
         "{}",
         stderr(&o)
     );
+}
+
+#[test]
+fn mmlt_on_the_door_writes_its_technique_histogram() {
+    let dir = temp_dir("mmlt");
+    let (out, stats) = (dir.join("door.exr"), dir.join("door.json"));
+    let o = caustica(&[
+        "render",
+        "assets/door.gltf",
+        "-o",
+        path_str(&out),
+        "--integrator",
+        "mmlt",
+        "--spp",
+        "4",
+        "--width",
+        "40",
+        "--large-step",
+        "0.5",
+        "--sigma",
+        "0.02",
+        "--bootstrap",
+        "2000",
+        "--chains",
+        "50",
+        "--max-depth",
+        "5",
+        "--stats",
+        path_str(&stats),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (image, meta) = read_exr(&out).unwrap();
+    assert_eq!(image.count_non_finite(), 0);
+    assert!(image.mean_luminance() > 0.0, "light comes through the slit");
+    assert!(
+        meta["parameters"].contains("\"large_step\":0.5"),
+        "{}",
+        meta["parameters"]
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let h = &json["integrator_statistics"];
+    let lengths = h["path_lengths"].as_array().unwrap();
+    assert_eq!(lengths.len(), 6, "path lengths 0 to 5");
+    let counted: u64 = lengths
+        .iter()
+        .flat_map(|l| l["steps_in_technique"].as_array().unwrap())
+        .map(|c| c.as_u64().unwrap())
+        .sum();
+    assert_eq!(counted, h["total_steps"].as_u64().unwrap());
+    // Four passes of 40 x 40 steps (the door's camera has no aspect ratio: square), shared
+    // by 50 chains of 32 steps each.
+    assert_eq!((image.width, image.height), (40, 40));
+    assert_eq!(counted, 4 * 50 * 32);
+
+    // bdpt renders too, and an MMLT flag given to another integrator is refused.
+    let o = caustica(&[
+        "render",
+        "assets/cornell-box.gltf",
+        "-o",
+        path_str(&dir.join("b.exr")),
+        "--integrator",
+        "bdpt",
+        "--spp",
+        "2",
+        "--width",
+        "24",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = caustica(&[
+        "render",
+        "assets/cornell-box.gltf",
+        "-o",
+        path_str(&dir.join("c.exr")),
+        "--integrator",
+        "pt",
+        "--sigma",
+        "0.1",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("sigma"), "{}", stderr(&o));
 }

@@ -440,7 +440,8 @@ fn mmlt_in_the_viewer_with_live_large_step_histogram_and_warning() {
     h.state_mut().apply(Command::SetIntegrator("mmlt".into()));
     h.state_mut()
         .apply(Command::SetParam("bootstrap".into(), 2000.0));
-    h.state_mut().apply(Command::SetParam("chains".into(), 64.0));
+    h.state_mut()
+        .apply(Command::SetParam("chains".into(), 64.0));
     step_until(&mut h, "MMLT frames", rendering);
     let sessions = h.state().controller.sessions_started;
     let technique_plot = |app: &ViewerApp| {
@@ -484,7 +485,8 @@ fn mmlt_in_the_viewer_with_live_large_step_histogram_and_warning() {
     h.get_by_label_contains("chains never jump");
 
     // A restart resets the histogram.
-    h.state_mut().apply(Command::SetParam("chains".into(), 32.0));
+    h.state_mut()
+        .apply(Command::SetParam("chains".into(), 32.0));
     assert_eq!(h.state().controller.sessions_started, sessions + 1);
     step_until(&mut h, "frames after the restart", rendering);
     let steps: u64 = h
@@ -495,5 +497,8 @@ fn mmlt_in_the_viewer_with_live_large_step_histogram_and_warning() {
         .and_then(|s| s["total_steps"].as_u64())
         .unwrap();
     let frame = h.state().controller.frame().unwrap();
-    assert!(steps <= frame.samples, "the histogram restarted with the session");
+    assert!(
+        steps <= frame.samples,
+        "the histogram restarted with the session"
+    );
 }
