@@ -6,8 +6,8 @@
 //!
 //! Closest-hit and occlusion queries for camera rays (coherent) and for diffuse-bounce rays
 //! (cosine-distributed from the camera rays' hits, incoherent), on one thread and on all
-//! cores; and path-tracer samples per second. Throughput is reported as elements (rays or
-//! samples) per second.
+//! cores; path-tracer, photon-mapping, bidirectional and MMLT throughput. Throughput is
+//! reported as elements (rays, samples, photons or mutations) per second.
 
 use caustica_renderer::camera::PerspectiveCamera;
 use caustica_renderer::geometry::Ray;
@@ -213,12 +213,49 @@ fn bench_photon_mapping(c: &mut Criterion) {
     });
 }
 
+/// Bidirectional path tracing samples per second (cornell-glass, 64 x 64, max depth 64), and
+/// MMLT mutations per second (a pass is one mutation per pixel; door and cornell-glass at
+/// 64 x 64, default parameters: 1000 chains, max depth 10; the bootstrap runs in the warm-up).
+fn bench_bidirectional(c: &mut Criterion) {
+    use caustica_renderer::integrators::bdpt::{BdptIntegrator, BdptSettings};
+    use caustica_renderer::integrators::mmlt::{MmltIntegrator, MmltSettings};
+    let size = 64;
+    let glass = scene();
+    let door = Arc::new(
+        load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/door.gltf"))
+            .expect("the bundled scene loads"),
+    );
+    let ctx = |scene: &Arc<Scene>| RenderContext {
+        scene: scene.clone(),
+        camera: PerspectiveCamera::new(&scene.camera, size, size),
+        seed: 0,
+    };
+    bench_passes(c, "bdpt samples", (size * size) as u64, || {
+        Box::new(BdptIntegrator::new(
+            ctx(&glass),
+            BdptSettings {
+                max_depth: 64,
+                only_strategy: None,
+            },
+        ))
+    });
+    for (name, scene) in [("door", &door), ("cornell-glass", &glass)] {
+        bench_passes(
+            c,
+            &format!("mmlt mutations, {name}"),
+            (size * size) as u64,
+            || Box::new(MmltIntegrator::new(ctx(scene), MmltSettings::default())),
+        );
+    }
+}
+
 criterion_group!(
     benches,
     bench_rays,
     bench_path_tracer,
     bench_load,
     bench_cancel,
-    bench_photon_mapping
+    bench_photon_mapping,
+    bench_bidirectional
 );
 criterion_main!(benches);

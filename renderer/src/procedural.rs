@@ -519,10 +519,11 @@ pub fn caustic_pool() -> SceneDescription {
 }
 
 /// Veach's door scene, in our words: two rooms joined by a doorway whose door is shut but for
-/// a 6 cm slit; the only light hangs under the ceiling of the far room. Everything the camera
-/// sees in the near room is lit through the slit, mostly after bounces in the far room, on a
-/// glossy floor and a glossy metal sphere: next-event estimation from the near room finds the
-/// light almost always occluded, so a path tracer's image is mostly noise, while Metropolis
+/// a 3 cm slit; the only light is an uplight in the far room, which lights that room's
+/// ceiling. Everything the camera sees in the near room is lit through the slit after at
+/// least one bounce in the far room, on a glossy floor and a glossy metal sphere: next-event
+/// estimation from the near room never sees the light, and a path tracer must pass the slit
+/// and then hit the far ceiling by chance, so its image is mostly noise, while Metropolis
 /// chains keep the paths that pass the slit once they have found them.
 pub fn door() -> SceneDescription {
     let white = Material {
@@ -549,7 +550,7 @@ pub fn door() -> SceneDescription {
     };
     let light = Material {
         name: "light".into(),
-        emission: Vec3::new(400.0, 360.0, 300.0),
+        emission: Vec3::new(2500.0, 2250.0, 1875.0),
         ..Material::diffuse(Vec3::ZERO)
     };
     let v = Vec3::new;
@@ -574,8 +575,8 @@ pub fn door() -> SceneDescription {
         slab("dividing wall -z", v(xw, 0.0, -z), v(xw + t, h, -0.5), 0),
         slab("dividing wall +z", v(xw, 0.0, 0.5), v(xw + t, h, z), 0),
         slab("lintel", v(xw, 2.0, -0.5), v(xw + t, h, 0.5), 0),
-        // The door fills the doorway but for a 6 cm slit along its free edge.
-        slab("door", v(xw + 0.02, 0.0, -0.5), v(xw + 0.07, 2.0, 0.44), 3),
+        // The door fills the doorway but for a 3 cm slit along its free edge.
+        slab("door", v(xw + 0.02, 0.0, -0.5), v(xw + 0.07, 2.0, 0.47), 3),
         uv_sphere("metal sphere", v(0.3, 0.45, -0.9), 0.45, 48, 24, false, 2),
         cuboid(
             "block",
@@ -586,13 +587,14 @@ pub fn door() -> SceneDescription {
             ),
             0,
         ),
+        // The uplight faces the far room's ceiling.
         quad(
             "light",
             [
-                v(3.8, h - 0.01, -0.4),
-                v(4.6, h - 0.01, -0.4),
-                v(4.6, h - 0.01, 0.4),
-                v(3.8, h - 0.01, 0.4),
+                v(3.8, 2.0, 0.4),
+                v(4.6, 2.0, 0.4),
+                v(4.6, 2.0, -0.4),
+                v(3.8, 2.0, -0.4),
             ],
             4,
         ),

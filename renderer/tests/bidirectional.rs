@@ -466,16 +466,19 @@ fn a_chain_in_a_zero_state_moves_on() {
     let mut chain = black.expect("some bootstrap samples of 2 bounces are black");
     let mut histogram = TechniqueHistogram::new(2);
     let mut out = ChainOutput::default();
-    chain.run(
-        &scene,
-        &camera,
-        200,
-        0.3,
-        0.01,
-        &mut scratch,
-        &mut histogram,
-        &mut out,
-    );
+    chain
+        .run(
+            &scene,
+            &camera,
+            200,
+            0.3,
+            0.01,
+            &mut scratch,
+            &mut histogram,
+            &mut out,
+            &std::sync::atomic::AtomicBool::new(false),
+        )
+        .unwrap();
     assert!(chain.current_luminance() > 0.0);
     assert!(!out.splats.is_empty());
     assert!(
@@ -483,4 +486,35 @@ fn a_chain_in_a_zero_state_moves_on() {
             .iter()
             .all(|(_, v)| v.is_finite() && v.min_element() >= 0.0)
     );
+}
+
+/// The same seed and pass count give the same image on one thread and on two: bdpt's t = 1
+/// splats are merged in row order and mmlt's chains in chain order (design.md section 6).
+#[test]
+fn bdpt_and_mmlt_images_do_not_depend_on_the_thread_count() {
+    for (integrator, params) in [
+        ("bdpt", vec![]),
+        (
+            "mmlt",
+            mmlt_params(&[("bootstrap", 5000.0), ("chains", 50.0)]),
+        ),
+    ] {
+        let run = |threads| {
+            let session = Session::start(SessionConfig {
+                scene: Arc::new(Scene::build(cornell_box(true)).unwrap()),
+                integrator: integrator.into(),
+                params: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+                width: 24,
+                height: 24,
+                seed: 5,
+                threads,
+                max_passes: Some(6),
+                time_limit: None,
+                on_frame: None,
+            })
+            .unwrap();
+            (*session.wait().image).clone()
+        };
+        assert_eq!(run(1).pixels, run(2).pixels, "{integrator}");
+    }
 }

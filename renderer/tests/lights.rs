@@ -1,6 +1,6 @@
-//! Closed-form radiance of a plane lit by each kind of light, through the path tracer: this
-//! checks light sampling, pdf conversions, one-sided emission, shadow rays and the MIS
-//! weights between light and BSDF sampling. A very narrow camera looks at one point p0 of the
+//! Closed-form radiance of a plane lit by each kind of light, through the path tracer and the
+//! bidirectional path tracer: this checks light sampling and emission, pdf conversions,
+//! one-sided emission, shadow rays and the MIS weights between strategies. A very narrow camera looks at one point p0 of the
 //! plane, so every pixel estimates the same radiance and their spread gives the tolerance.
 
 use caustica_renderer::integrators::ParamValues;
@@ -34,36 +34,47 @@ fn plane_scene(material: Material) -> SceneDescription {
     }
 }
 
-/// Mean radiance over the image (luminance channel x) and its standard error.
-fn render_mean(desc: SceneDescription, passes: u64) -> (f64, f64) {
-    let session = Session::start(SessionConfig {
-        scene: Arc::new(Scene::build(desc).unwrap()),
-        integrator: "pt".into(),
-        params: ParamValues::new(),
-        width: 32,
-        height: 32,
-        seed: 3,
-        threads: 0,
-        max_passes: Some(passes),
-        time_limit: None,
-        on_frame: None,
-    })
-    .unwrap();
-    let frame = session.wait();
-    assert_eq!(frame.dropped, 0);
-    let v: Vec<f64> = frame.image.pixels.iter().map(|p| p.x as f64).collect();
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
+/// Mean radiance over the image (luminance channel x) and its standard error, for each
+/// integrator that must reproduce the closed forms.
+fn render_mean(desc: SceneDescription, passes: u64) -> Vec<(&'static str, (f64, f64))> {
+    ["pt", "bdpt"]
+        .into_iter()
+        .map(|integrator| {
+            let session = Session::start(SessionConfig {
+                scene: Arc::new(Scene::build(desc.clone()).unwrap()),
+                integrator: integrator.into(),
+                params: ParamValues::new(),
+                width: 32,
+                height: 32,
+                seed: 3,
+                threads: 0,
+                max_passes: Some(passes),
+                time_limit: None,
+                on_frame: None,
+            })
+            .unwrap();
+            let frame = session.wait();
+            assert_eq!(frame.dropped, 0);
+            let v: Vec<f64> = frame.image.pixels.iter().map(|p| p.x as f64).collect();
+            let n = v.len() as f64;
+            let mean = v.iter().sum::<f64>() / n;
+            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            (integrator, (mean, (var / n).sqrt()))
+        })
+        .collect()
 }
 
-fn assert_close(name: &str, (mean, se): (f64, f64), exact: f64) {
-    assert!(
-        (mean - exact).abs() <= 4.0 * se + 2e-4 * exact,
-        "{name}: {mean} ± {se}, exact {exact}"
-    );
-    assert!(se < 0.05 * exact, "{name}: too noisy to test ({se})");
+fn assert_close(name: &str, results: Vec<(&str, (f64, f64))>, exact: f64) {
+    for (integrator, (mean, se)) in results {
+        assert!(
+            (mean - exact).abs() <= 4.0 * se + 2e-4 * exact,
+            "{name}, {integrator}: {mean} ± {se}, exact {exact}"
+        );
+        assert!(
+            se < 0.05 * exact,
+            "{name}, {integrator}: too noisy to test ({se})"
+        );
+    }
 }
 
 #[test]
@@ -143,11 +154,12 @@ fn square_area_light_on_a_diffuse_plane() {
     // Turned upside down, the one-sided light sends nothing to the plane.
     let m = desc.meshes.last_mut().unwrap();
     m.indices = vec![0, 2, 1, 0, 3, 2];
-    let (mean, _) = render_mean(desc, 4);
-    assert_eq!(
-        mean, 0.0,
-        "a one-sided emitter lit the side it faces away from"
-    );
+    for (integrator, (mean, _)) in render_mean(desc, 4) {
+        assert_eq!(
+            mean, 0.0,
+            "{integrator}: a one-sided emitter lit the side it faces away from"
+        );
+    }
 }
 
 #[test]

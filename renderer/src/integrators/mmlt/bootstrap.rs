@@ -4,11 +4,13 @@
 //! luminance, so they spread over path lengths as the image's energy does.
 
 use crate::camera::PerspectiveCamera;
+use crate::integrators::Cancelled;
 use crate::integrators::mmlt::path_sample::{Subpaths, evaluate};
 use crate::sampling::distribution::Distribution1D;
 use crate::sampling::pss::PssSampler;
 use crate::scene::Scene;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 pub struct Bootstrap {
     /// b: the mean over primary sample space of the target summed over path lengths.
@@ -35,18 +37,22 @@ pub fn run(
     seed: u64,
     samples: usize,
     max_depth: usize,
-) -> Bootstrap {
+    cancel: &AtomicBool,
+) -> Result<Bootstrap, Cancelled> {
     let lengths = max_depth + 1;
     let results: Vec<(f64, u64, bool)> = (0..samples * lengths)
         .into_par_iter()
         .map_init(Subpaths::default, |scratch, key| {
+            if key % 1024 == 0 && cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
+            }
             let (i, k) = (key / lengths, key % lengths);
             let mut sampler = PssSampler::new(seed, bootstrap_key(i, k, max_depth), 0.0, 1.0);
             let mut rays = 0;
             let sample = evaluate(scene, camera, &mut sampler, k, scratch, &mut rays);
-            (sample.luminance() as f64, rays, !sample.is_valid())
+            Ok((sample.luminance() as f64, rays, !sample.is_valid()))
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     let mut per_length = vec![0.0; lengths];
     // Sample i of every length together is one sample of the sum over lengths.
     let mut sum_sq = 0.0;
@@ -64,12 +70,12 @@ pub fn run(
     let b = per_length.iter().sum::<f64>();
     let n = samples as f64;
     let variance = (sum_sq / n - b * b).max(0.0) * n / (n - 1.0).max(1.0);
-    Bootstrap {
+    Ok(Bootstrap {
         b,
         per_length,
         standard_error: (variance / n).sqrt(),
         seeds: (b > 0.0).then(|| Distribution1D::new(&weights)),
         rays: results.iter().map(|r| r.1).sum(),
         dropped: results.iter().filter(|r| r.2).count() as u64,
-    }
+    })
 }

@@ -5,11 +5,13 @@
 //! (1 - a) L / Y.
 
 use crate::camera::PerspectiveCamera;
+use crate::integrators::Cancelled;
 use crate::integrators::mmlt::histogram::TechniqueHistogram;
 use crate::integrators::mmlt::path_sample::{PathSample, Subpaths, evaluate};
 use crate::sampling::pss::PssSampler;
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 pub struct Chain {
     sampler: PssSampler,
@@ -80,10 +82,14 @@ impl Chain {
         scratch: &mut Subpaths,
         histogram: &mut TechniqueHistogram,
         out: &mut ChainOutput,
-    ) {
+        cancel: &AtomicBool,
+    ) -> Result<(), Cancelled> {
         self.sampler.large_step_prob = large_step_prob;
         self.sampler.sigma = sigma;
-        for _ in 0..steps {
+        for step in 0..steps {
+            if step % 256 == 255 && cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
+            }
             self.sampler.start_iteration();
             let mut proposed = evaluate(
                 scene,
@@ -133,5 +139,6 @@ impl Chain {
                 self.sampler.reject();
             }
         }
+        Ok(())
     }
 }

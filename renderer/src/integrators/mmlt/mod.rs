@@ -189,7 +189,7 @@ impl MmltIntegrator {
         }
     }
 
-    fn start(&mut self, stats: &mut PassStats) {
+    fn start(&mut self, stats: &mut PassStats, cancel: &AtomicBool) -> Result<(), Cancelled> {
         let (scene, camera, seed) = (&*self.ctx.scene, &self.ctx.camera, self.ctx.seed);
         let max_depth = self.settings.max_depth as usize;
         let boot = bootstrap::run(
@@ -198,14 +198,15 @@ impl MmltIntegrator {
             seed,
             self.settings.bootstrap as usize,
             max_depth,
-        );
+            cancel,
+        )?;
         stats.rays += boot.rays;
         stats.dropped += boot.dropped;
         stats.samples += self.settings.bootstrap * (max_depth as u64 + 1);
         self.bootstrap_per_length = boot.per_length.clone();
         let Some(seeds) = boot.seeds else {
             self.phase = Phase::Black;
-            return;
+            return Ok(());
         };
         let lengths = max_depth + 1;
         let chains: Vec<(Chain, u64)> = (0..self.settings.chains)
@@ -247,6 +248,7 @@ impl MmltIntegrator {
             b_sum: boot.per_length.iter().map(|b| b * samples as f64).collect(),
             b_count: vec![samples; lengths],
         };
+        Ok(())
     }
 }
 
@@ -254,7 +256,7 @@ impl Integrator for MmltIntegrator {
     fn render_pass(&mut self, _pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let mut stats = PassStats::default();
         if matches!(self.phase, Phase::Starting) {
-            self.start(&mut stats);
+            self.start(&mut stats, cancel)?;
         }
         let Phase::Running {
             chains,
@@ -291,7 +293,8 @@ impl Integrator for MmltIntegrator {
                     scratch,
                     &mut histogram,
                     &mut out,
-                );
+                    cancel,
+                )?;
                 Ok((out, histogram))
             })
             .collect::<Result<_, _>>()?;
