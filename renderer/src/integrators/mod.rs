@@ -245,6 +245,16 @@ pub fn resolve_params(info: &IntegratorInfo, given: &ParamValues) -> Result<Para
     Ok(values)
 }
 
+/// The value of parameter `name` in `values`, else its default from `specs` (0 if unknown).
+pub fn param_or_default(specs: &[ParamSpec], values: &ParamValues, name: &str) -> f64 {
+    values.get(name).copied().unwrap_or_else(|| {
+        specs
+            .iter()
+            .find(|s| s.name == name)
+            .map_or(0.0, |s| s.default)
+    })
+}
+
 pub fn check_param(p: &ParamSpec, v: f64) -> Result<(), String> {
     if !v.is_finite() || v < p.min || v > p.max {
         return Err(format!(

@@ -93,14 +93,7 @@ impl MmltSettings {
     ];
 
     pub fn from_params(p: &ParamValues) -> Self {
-        let get = |name: &str| {
-            p.get(name).copied().unwrap_or_else(|| {
-                Self::PARAMS
-                    .iter()
-                    .find(|s| s.name == name)
-                    .map_or(0.0, |s| s.default)
-            })
-        };
+        let get = |name: &str| crate::integrators::param_or_default(Self::PARAMS, p, name);
         MmltSettings {
             large_step_prob: get("large_step").clamp(0.0, 1.0),
             sigma: get("sigma").clamp(1e-5, 1.0),

@@ -99,14 +99,7 @@ impl PhotonMappingSettings {
     ];
 
     pub fn from_params(p: &ParamValues) -> Self {
-        let get = |name: &str| {
-            p.get(name).copied().unwrap_or_else(|| {
-                Self::PARAMS
-                    .iter()
-                    .find(|s| s.name == name)
-                    .map_or(0.0, |s| s.default)
-            })
-        };
+        let get = |name: &str| crate::integrators::param_or_default(Self::PARAMS, p, name);
         PhotonMappingSettings {
             alpha: get("alpha"),
             radius: get("radius"),
