@@ -4,6 +4,8 @@
 //! Exit codes: 0 success, 1 runtime error (unreadable or invalid scene, unwritable output,
 //! no window), 2 bad arguments. Each error is one line naming the file or argument.
 
+mod chart;
+mod converge;
 mod render;
 
 use caustica::viewer::{self, Automation, ViewerOptions};
@@ -49,30 +51,38 @@ struct Cli {
 enum Command {
     /// Render a glTF scene without a window and write the image (EXR or PNG).
     Render(render::RenderArgs),
+    /// Measure error against time for integrators and parameter values on one scene.
+    Converge(converge::ConvergeArgs),
+}
+
+/// Exit code and message of a subcommand's outcome: bad arguments the way clap reports them
+/// (exit code 2), runtime errors as one line (exit code 1).
+fn finish(subcommand: &str, result: Result<(), render::Failure>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(render::Failure::Usage(msg)) => {
+            let cmd = Cli::command();
+            let mut sub = cmd
+                .find_subcommand(subcommand)
+                .cloned()
+                .unwrap_or(cmd)
+                .bin_name(format!("caustica {subcommand}"));
+            sub.error(clap::error::ErrorKind::ValueValidation, msg)
+                .exit()
+        }
+        Err(render::Failure::Runtime(e)) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
 }
 
 fn main() -> ExitCode {
     let launched = std::time::Instant::now();
     let cli = Cli::parse();
     match cli.command {
-        Some(Command::Render(args)) => match render::run(&args) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(render::Failure::Usage(msg)) => {
-                let cmd = Cli::command();
-                let mut render = cmd
-                    .find_subcommand("render")
-                    .cloned()
-                    .unwrap_or(cmd)
-                    .bin_name("caustica render");
-                render
-                    .error(clap::error::ErrorKind::ValueValidation, msg)
-                    .exit()
-            }
-            Err(render::Failure::Runtime(e)) => {
-                eprintln!("error: {e:#}");
-                ExitCode::from(1)
-            }
-        },
+        Some(Command::Render(args)) => finish("render", render::run(&args)),
+        Some(Command::Converge(args)) => finish("converge", converge::run(&args)),
         None => {
             let automation = cli.screenshot.map(|screenshot| Automation {
                 screenshot,

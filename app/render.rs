@@ -2,12 +2,12 @@
 
 use anyhow::{Context, anyhow};
 use caustica_renderer::image::{write_exr, write_png};
-use caustica_renderer::integrators::{self, ParamValues, params_json};
+use caustica::metadata::{RunDescription, exr_metadata};
+use caustica_renderer::integrators::{self, ParamValues};
 use caustica_renderer::scene::gltf;
 use caustica_renderer::session::{Session, SessionConfig};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
@@ -29,6 +29,10 @@ pub struct RenderArgs {
     /// Render for this many seconds instead of a number of samples.
     #[arg(long, value_parser = parse_seconds, allow_negative_numbers = true)]
     pub time: Option<f64>,
+    /// Stop once the estimated remaining relMSE falls below E (--time or --spp, if given,
+    /// still cap the run).
+    #[arg(long, value_name = "E", value_parser = parse_positive, allow_negative_numbers = true)]
+    pub until_error: Option<f64>,
     /// Image width in pixels [default: 512, or from --height and the camera's aspect ratio].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     pub width: Option<u32>,
@@ -74,7 +78,7 @@ pub struct RenderArgs {
     pub exposure: f32,
 }
 
-fn parse_seconds(s: &str) -> Result<f64, String> {
+pub fn parse_seconds(s: &str) -> Result<f64, String> {
     let v: f64 = s
         .parse()
         .map_err(|_| format!("'{s}' is not a number of seconds"))?;
@@ -82,6 +86,13 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
         Ok(v)
     } else {
         Err(format!("'{s}' must be a positive number of seconds"))
+    }
+}
+
+fn parse_positive(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("'{s}' must be a positive number")),
     }
 }
 
@@ -122,7 +133,7 @@ fn output_format(path: &Path) -> Result<Format, Failure> {
 
 /// The output size: what was given, the rest from the camera's aspect ratio (width over
 /// height) when the scene has one, else square; 512 wide when neither is given.
-fn output_size(width: Option<u32>, height: Option<u32>, aspect: Option<f32>) -> (u32, u32) {
+pub fn output_size(width: Option<u32>, height: Option<u32>, aspect: Option<f32>) -> (u32, u32) {
     let aspect = aspect.filter(|a| a.is_finite() && *a > 0.0).unwrap_or(1.0) as f64;
     let fit = |v: f64| (v.round() as u32).clamp(1, 16384);
     match (width, height) {
@@ -196,10 +207,11 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         eprintln!("warning: {w}");
     }
 
-    let spp = if args.time.is_none() {
-        Some(args.spp.unwrap_or(16))
-    } else {
-        None
+    // Without a time, a pass count or a target error, 16 passes.
+    let spp = match (args.spp, args.time, args.until_error) {
+        (Some(n), _, _) => Some(n),
+        (None, None, None) => Some(16),
+        _ => None,
     };
     let session = Session::start(SessionConfig {
         scene: scene.clone(),
@@ -212,6 +224,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         max_passes: spp,
         time_limit: args.time.map(Duration::from_secs_f64),
         on_frame: None,
+        target_rel_mse: args.until_error,
     })
     .map_err(|e| Failure::Usage(e.to_string()))?;
 
@@ -232,7 +245,15 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         let frame = session.frame();
         bar.set_position(frame.passes);
         let secs = frame.elapsed.as_secs_f64().max(1e-9);
-        bar.set_message(format!("{:.2} Mrays/s", frame.rays as f64 / secs / 1e6));
+        let error = frame
+            .error
+            .as_ref()
+            .as_ref()
+            .map_or(String::new(), |e| format!("  est. relMSE {:.3e}", e.rel_mse));
+        bar.set_message(format!(
+            "{:.2} Mrays/s{error}",
+            frame.rays as f64 / secs / 1e6
+        ));
     }
     let threads = session.threads();
     let frame = session.wait();
@@ -242,18 +263,17 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     }
 
     let secs = frame.elapsed.as_secs_f64().max(1e-9);
-    let metadata = BTreeMap::from([
-        ("integrator".to_string(), info.name.to_string()),
-        ("parameters".to_string(), params_json(&params)),
-        ("elapsed_seconds".to_string(), format!("{secs:.3}")),
-        ("passes".to_string(), frame.passes.to_string()),
-        ("samples_per_pixel".to_string(), frame.passes.to_string()),
-        ("seed".to_string(), args.seed.to_string()),
-        ("scene".to_string(), args.scene.display().to_string()),
-        ("threads".to_string(), threads.to_string()),
-        ("rays".to_string(), frame.rays.to_string()),
-        ("dropped_samples".to_string(), frame.dropped.to_string()),
-    ]);
+    let metadata = exr_metadata(
+        &RunDescription {
+            integrator: info.name,
+            params: &params,
+            seed: args.seed,
+            scene: &args.scene,
+            threads,
+        },
+        &frame,
+    );
+    let estimate = frame.error.as_ref().as_ref();
     match format {
         Format::Exr => write_exr(&args.output, &frame.image, &metadata),
         Format::Png => write_png(&args.output, &frame.image, args.exposure),
@@ -270,20 +290,31 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             "elapsed_seconds": secs,
             "threads": threads,
             "messages": *frame.messages,
+            "estimated_relmse": estimate.map(|e| e.rel_mse),
+            "estimated_bias_relmse": estimate.map(|e| e.bias_rel_mse),
             "integrator_statistics": *frame.statistics,
         });
         let text = serde_json::to_string_pretty(&stats).unwrap_or_default();
         std::fs::write(path, text + "\n")
             .with_context(|| format!("{}: cannot write the statistics", path.display()))?;
     }
+    if let Some(target) = args.until_error {
+        match estimate {
+            Some(e) if e.rel_mse < target => {
+                eprintln!("estimated relMSE {:.3e} is below {target:e}", e.rel_mse)
+            }
+            _ => eprintln!("note: stopped before the estimated relMSE fell below {target:e}"),
+        }
+    }
     eprintln!(
-        "{} passes, {} samples in {:.2} s on {} threads: {:.2} Mrays/s, {} dropped samples -> {}",
+        "{} passes, {} samples in {:.2} s on {} threads: {:.2} Mrays/s, {} dropped samples, estimated relMSE {} -> {}",
         frame.passes,
         frame.samples,
         secs,
         threads,
         frame.rays as f64 / secs / 1e6,
         frame.dropped,
+        estimate.map_or("unknown".to_string(), |e| format!("{:.3e}", e.rel_mse)),
         args.output.display()
     );
     Ok(())

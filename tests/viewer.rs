@@ -228,6 +228,7 @@ fn the_convergence_plot_measures_the_render_against_a_reference() {
         max_passes: Some(256),
         time_limit: None,
         on_frame: None,
+        target_rel_mse: None,
     })
     .unwrap()
     .wait();
@@ -271,6 +272,73 @@ fn the_convergence_plot_measures_the_render_against_a_reference() {
             .is_some_and(|p| p.contains("reference"))
     });
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Without any reference the render estimates its own error: a number in the statistics,
+/// a falling line on the convergence plot, and (E) a heat map over the image whose colours are
+/// the frame's per-pixel estimates.
+#[test]
+fn the_estimated_error_is_shown_as_a_number_a_line_and_a_heat_map() {
+    use caustica::viewer::error_map;
+    let mut h = harness(Some(asset("cornell-box.gltf")));
+    step_until(&mut h, "estimated points", |a| {
+        a.convergence.estimated.len() >= 4
+    });
+    // The statistics' row and the convergence plot's legend.
+    assert_eq!(h.query_all_by_label("estimated relMSE").count(), 2);
+    let estimated = h.state().convergence.estimated.clone();
+    assert!(
+        estimated.iter().all(|p| p[0] > 0.0 && p[1].is_finite() && p[1] > 0.0),
+        "{estimated:?}"
+    );
+    assert!(
+        estimated.windows(2).all(|w| w[1][0] > w[0][0]),
+        "points in time order"
+    );
+    step_until(&mut h, "the estimate to fall", |a| {
+        let e = &a.convergence.estimated;
+        e.len() >= 2 && e.last().unwrap()[1] < 0.5 * e[0][1]
+    });
+
+    // Paused, the frame and its estimate stay put while the map is compared with them.
+    h.state_mut().apply(Command::TogglePause);
+    step_until(&mut h, "the pause", |a| {
+        a.controller
+            .frame()
+            .is_some_and(|f| f.state == RunState::Paused)
+    });
+    h.key_press(egui::Key::E);
+    h.run_steps(1);
+    assert!(h.state().settings.show_error_map);
+    step_until(&mut h, "the heat map", |a| {
+        a.controller
+            .frame()
+            .is_some_and(|f| a.error_map.shows(&f.error))
+    });
+    // The image is fitted in the central panel (the screen's left 800 points, above the plots);
+    // find a pixel there through the inspector and compare the screen with the map's colour.
+    let central = egui::pos2((1100.0 - 300.0) / 2.0, (700.0 - 200.0 - 24.0) / 2.0);
+    h.hover_at(central);
+    h.run_steps(2);
+    let p = h.state().hovered.expect("the cursor is over the image");
+    let frame = h.state().controller.frame().unwrap();
+    let estimate = frame.error.as_ref().as_ref().unwrap();
+    let expected = error_map::colour(estimate.per_pixel[p.y as usize * 96 + p.x as usize]);
+    // The inspector's tooltip would cover the pixel: move away before looking.
+    h.hover_at(egui::pos2(1090.0, 690.0));
+    h.run_steps(2);
+    let screen = h.render().expect("a rendered screen");
+    let ppp = h.ctx.pixels_per_point();
+    let shown = screen.get_pixel((central.x * ppp) as u32, (central.y * ppp) as u32);
+    for c in 0..3 {
+        assert!(
+            (shown[c] as i32 - expected[c] as i32).abs() <= 3,
+            "screen {shown:?}, map colour {expected:?}"
+        );
+    }
+    h.key_press(egui::Key::E);
+    h.run_steps(1);
+    assert!(!h.state().settings.show_error_map);
 }
 
 #[test]

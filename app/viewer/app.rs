@@ -4,15 +4,16 @@
 
 use crate::viewer::controller::{ControllerEvent, ParamEffect, RenderController};
 use crate::viewer::convergence::Convergence;
+use crate::viewer::error_map::ErrorMap;
 use crate::viewer::panels::{self, PanelStatus};
 use crate::viewer::plots;
 use crate::viewer::settings::{STORAGE_KEY, ViewerSettings};
 use crate::viewer::tonemap;
 use crate::viewer::viewport::{HoveredPixel, Viewport};
 use caustica_renderer::image::{ToneCurve, write_exr, write_png_tone_mapped};
-use caustica_renderer::integrators::{self, params_json};
+use crate::metadata::{RunDescription, exr_metadata};
+use caustica_renderer::integrators;
 use eframe::egui::{self, Key, KeyboardShortcut, Modifiers};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};
@@ -37,6 +38,7 @@ pub enum Command {
     SaveExr,
     SavePng,
     TogglePlots,
+    ToggleErrorMap,
     ShowReferenceDialog,
     LoadReference(PathBuf),
 }
@@ -89,6 +91,7 @@ pub struct ViewerApp {
     pub settings: ViewerSettings,
     pub controller: RenderController,
     pub convergence: Convergence,
+    pub error_map: ErrorMap,
     pub viewport: Viewport,
     pub messages: Vec<Message>,
     /// Where snapshots go.
@@ -124,6 +127,7 @@ impl ViewerApp {
             settings: settings.sanitized(),
             controller: RenderController::new(repaint.clone()),
             convergence: Convergence::new(repaint),
+            error_map: ErrorMap::default(),
             viewport: Viewport::default(),
             messages: Vec::new(),
             snapshot_dir: PathBuf::from("."),
@@ -233,6 +237,10 @@ impl ViewerApp {
             Command::SaveExr => self.save(false),
             Command::SavePng => self.save(true),
             Command::TogglePlots => self.settings.show_plots = !self.settings.show_plots,
+            Command::ToggleErrorMap => {
+                self.settings.show_error_map = !self.settings.show_error_map;
+                self.error_map.clear();
+            }
         }
     }
 
@@ -261,25 +269,23 @@ impl ViewerApp {
         };
         let path = self.snapshot_path(if png { "png" } else { "exr" });
         let (exposure, curve) = (self.settings.exposure, self.settings.tone_curve);
-        let metadata = BTreeMap::from([
-            ("integrator".to_string(), self.settings.integrator.clone()),
-            ("parameters".to_string(), params_json(&self.settings.params)),
-            (
-                "elapsed_seconds".to_string(),
-                format!("{:.3}", frame.elapsed.as_secs_f64()),
-            ),
-            ("passes".to_string(), frame.passes.to_string()),
-            ("samples_per_pixel".to_string(), frame.passes.to_string()),
-            ("seed".to_string(), self.settings.seed.to_string()),
-            (
-                "scene".to_string(),
-                self.controller
-                    .scene
-                    .as_ref()
-                    .map(|s| s.path.display().to_string())
-                    .unwrap_or_default(),
-            ),
-        ]);
+        let scene = self
+            .controller
+            .scene
+            .as_ref()
+            .map(|s| s.path.clone())
+            .unwrap_or_default();
+        let session = self.controller.session();
+        let metadata = exr_metadata(
+            &RunDescription {
+                integrator: &self.settings.integrator,
+                params: session.map_or(&self.settings.params, |s| s.params()),
+                seed: self.settings.seed,
+                scene: &scene,
+                threads: session.map_or(0, |s| s.threads()),
+            },
+            &frame,
+        );
         let tx = self.saves.0.clone();
         std::thread::spawn(move || {
             let result = if png {
@@ -345,6 +351,7 @@ impl ViewerApp {
                 (Key::R, Command::Restart),
                 (Key::F, Command::Fit),
                 (Key::Num1, Command::OneToOne),
+                (Key::E, Command::ToggleErrorMap),
             ];
             for (key, command) in keys {
                 if ctx.input(|i| i.key_pressed(key) && i.modifiers.is_none()) {
@@ -466,12 +473,20 @@ impl eframe::App for ViewerApp {
         if self.controller.sessions_started != self.sessions_seen {
             self.sessions_seen = self.controller.sessions_started;
             self.convergence.reset();
+            self.error_map.clear();
         }
         self.convergence.poll();
         if let Some(f) = &current
             && f.passes > 0
         {
             self.convergence.offer(&f.image, f.elapsed.as_secs_f64());
+            if let Some(e) = f.error.as_ref() {
+                self.convergence
+                    .record_estimate(f.elapsed.as_secs_f64(), e.rel_mse);
+            }
+            if self.settings.show_error_map {
+                self.error_map.update(&ctx, &f.error);
+            }
         }
 
         egui::Panel::bottom("status").show(ui, |ui| {
@@ -528,11 +543,19 @@ impl eframe::App for ViewerApp {
                 .as_ref()
                 .map(|f| f.pixel_layers.clone())
                 .unwrap_or_default();
+            let error = current.as_ref().and_then(|f| f.error.as_ref().as_ref());
+            let overlay = self
+                .settings
+                .show_error_map
+                .then(|| self.error_map.texture())
+                .flatten();
             self.hovered = self.viewport.show(
                 ui,
                 frame.wgpu_render_state(),
                 image,
                 &layers,
+                error,
+                overlay,
                 self.settings.exposure,
                 self.settings.tone_curve,
             );

@@ -127,6 +127,7 @@ impl RenderController {
             max_passes: None,
             time_limit: None,
             on_frame: Some(self.on_frame.clone()),
+            target_rel_mse: None,
         })
         .map_err(|e| e.to_string())?;
         self.session = Some(session);

@@ -1,6 +1,8 @@
 //! Error against a reference as the render converges, measured on a background thread with
 //! the one metric implementation of the renderer (design.md section 3). The UI sends each new
 //! frame; the thread drops all but the newest, so it never falls behind and the UI never waits.
+//! Beside it, with or without a reference, the error each frame estimates of itself
+//! (`Frame::error`), recorded on the UI thread since it costs nothing to read.
 
 use caustica_renderer::image::{ErrorMetrics, Image, compare, read_exr};
 use std::path::PathBuf;
@@ -33,6 +35,9 @@ pub struct Convergence {
     replies: Receiver<Reply>,
     pub reference: Option<PathBuf>,
     pub points: Vec<ConvergencePoint>,
+    /// (seconds, estimated relMSE) of the frames seen, thinned to at most about 230 points a
+    /// decade of time so that hours of rendering stay a short list.
+    pub estimated: Vec<[f64; 2]>,
     /// Set when the reference could not be loaded or does not match the render.
     pub problem: Option<String>,
     run: u64,
@@ -93,6 +98,7 @@ impl Convergence {
             replies,
             reference: None,
             points: Vec::new(),
+            estimated: Vec::new(),
             problem: None,
             run: 0,
             last_sent: None,
@@ -109,7 +115,20 @@ impl Convergence {
     pub fn reset(&mut self) {
         self.run += 1;
         self.points.clear();
+        self.estimated.clear();
         self.last_sent = None;
+    }
+
+    /// Records a frame's own error estimate.
+    pub fn record_estimate(&mut self, seconds: f64, rel_mse: f64) {
+        if !(seconds > 0.0 && rel_mse > 0.0 && rel_mse.is_finite()) {
+            return;
+        }
+        match self.estimated.last_mut() {
+            // Within 1 % of the last point's time: the newer value replaces it.
+            Some(last) if seconds < last[0] * 1.01 => *last = [last[0], rel_mse],
+            _ => self.estimated.push([seconds, rel_mse]),
+        }
     }
 
     /// Offers the current frame; only new frames are measured.

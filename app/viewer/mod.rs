@@ -4,6 +4,7 @@
 pub mod app;
 pub mod controller;
 pub mod convergence;
+pub mod error_map;
 pub mod panels;
 pub mod plots;
 pub mod settings;

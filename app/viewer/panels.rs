@@ -230,9 +230,20 @@ pub fn side_panel(
                 out.push(Command::SavePng);
             }
         });
-        if ui.selectable_label(settings.show_plots, "Plots").clicked() {
-            out.push(Command::TogglePlots);
-        }
+        ui.horizontal(|ui| {
+            if ui.selectable_label(settings.show_plots, "Plots").clicked() {
+                out.push(Command::TogglePlots);
+            }
+            if ui
+                .selectable_label(settings.show_error_map, "Error map")
+                .on_hover_text(
+                    "E: each pixel's estimated remaining error (relMSE) over the image, on a log scale",
+                )
+                .clicked()
+            {
+                out.push(Command::ToggleErrorMap);
+            }
+        });
 
         ui.separator();
         ui.heading("Statistics");
@@ -272,6 +283,20 @@ fn statistics(ui: &mut egui::Ui, status: &PanelStatus) {
                 ui.label(v);
                 ui.end_row();
             }
+            ui.label("estimated relMSE").on_hover_text(
+                "the remaining error without a reference: mean over pixels of (x - r)^2 / (r^2 + 0.01), \
+                 estimated from the render's own samples (noise, and the kernel bias of photon mapping)",
+            );
+            match f.error.as_ref() {
+                Some(e) if e.bias_rel_mse > 0.0 => ui.label(format!(
+                    "{:.3e} ({:.0} % bias)",
+                    e.rel_mse,
+                    100.0 * e.bias_rel_mse / e.rel_mse
+                )),
+                Some(e) => ui.label(format!("{:.3e}", e.rel_mse)),
+                None => ui.label("after two passes"),
+            };
+            ui.end_row();
         }
         if let Some(bytes) = status.resident_bytes {
             ui.label("memory in use");

@@ -1,5 +1,6 @@
-//! The plot panel (egui_plot): error against time on log-log axes while a reference is
-//! loaded. Axes show log10 values; the tick labels give the plain numbers.
+//! The plot panel (egui_plot): error against time on log-log axes, the estimated relMSE
+//! always and the true relMSE and RMSE while a reference is loaded. Axes show log10 values;
+//! the tick labels give the plain numbers.
 
 use crate::viewer::app::Command;
 use crate::viewer::convergence::Convergence;
@@ -33,7 +34,7 @@ pub fn plots_panel(
                 ui.label(format!("against {}", path.display()));
             }
             None => {
-                ui.label("load a reference EXR to plot the error against time");
+                ui.label("estimated error; load a reference EXR for the true error");
             }
         }
         if ui.button("Load reference…").clicked() {
@@ -70,7 +71,12 @@ pub fn plots_panel(
     ui.horizontal(|ui| {
         ui.vertical(|ui| {
             ui.set_width(width);
-            convergence_plot(ui, height, &log_points);
+            let estimated: PlotPoints<'static> = convergence
+                .estimated
+                .iter()
+                .map(|p| [p[0].log10(), p[1].log10()])
+                .collect();
+            convergence_plot(ui, height, &log_points, estimated);
         });
         for title in &titles {
             ui.vertical(|ui| {
@@ -93,7 +99,7 @@ fn integrator_plot(ui: &mut egui::Ui, height: f32, title: &str, all: &[PlotSerie
         .filter(|s| s.kind == PlotKind::Bars)
         .collect();
     if bars.len() > 1 {
-        let id = ui.id().with(("shown series", title));
+        let id = ui.scope_id().with(("shown series", title));
         let mut chosen = ui
             .data(|d| d.get_temp::<String>(id))
             .filter(|c| bars.iter().any(|s| &s.name == c))
@@ -134,6 +140,7 @@ fn convergence_plot(
     ui: &mut egui::Ui,
     height: f32,
     log_points: &dyn Fn(fn(&caustica_renderer::image::ErrorMetrics) -> f64) -> PlotPoints<'static>,
+    estimated: PlotPoints<'static>,
 ) {
     Plot::new("convergence")
         .height(height)
@@ -145,6 +152,10 @@ fn convergence_plot(
         .show(ui, |plot| {
             plot.line(Line::new("relMSE", log_points(|m| m.rel_mse)));
             plot.line(Line::new("RMSE", log_points(|m| m.rmse)));
+            plot.line(
+                Line::new("estimated relMSE", estimated)
+                    .style(egui_plot::LineStyle::dashed_loose()),
+            );
         });
 }
 

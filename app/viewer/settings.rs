@@ -24,6 +24,8 @@ pub struct ViewerSettings {
     pub tone_curve: ToneCurve,
     pub recent_scenes: Vec<PathBuf>,
     pub show_plots: bool,
+    /// Lay the estimated-error heat map over the image.
+    pub show_error_map: bool,
 }
 
 impl Default for ViewerSettings {
@@ -40,6 +42,7 @@ impl Default for ViewerSettings {
             tone_curve: ToneCurve::Linear,
             recent_scenes: Vec::new(),
             show_plots: true,
+            show_error_map: false,
         }
     }
 }

@@ -2,7 +2,9 @@
 //! pan by dragging, and a pixel inspector on hover. The pixels are drawn by the GPU tone
 //! mapper (`tonemap`); the frame is uploaded only when a new one arrived.
 
+use crate::viewer::error_map;
 use crate::viewer::tonemap::{self, TonemapCallback};
+use caustica_renderer::error_estimate::ErrorEstimate;
 use caustica_renderer::image::{Image, ToneCurve};
 use caustica_renderer::integrators::PixelLayer;
 use eframe::egui::{self, Pos2, Rect, Sense, Vec2};
@@ -47,12 +49,18 @@ impl Viewport {
         self.zoom.is_none()
     }
 
+    /// Draws `image` (and over it, if given, the `overlay` texture of the same size, the
+    /// estimated-error map, with its scale); the inspector shows the integrator's `layers`
+    /// and the pixel's estimated error.
+    #[allow(clippy::too_many_arguments)]
     pub fn show(
         &mut self,
         ui: &mut egui::Ui,
         render_state: Option<&egui_wgpu::RenderState>,
         image: Option<&Arc<Image>>,
         layers: &[PixelLayer],
+        error: Option<&ErrorEstimate>,
+        overlay: Option<egui::TextureId>,
         exposure: f32,
         curve: ToneCurve,
     ) -> Option<HoveredPixel> {
@@ -122,6 +130,16 @@ impl Viewport {
                     );
                 }
             }
+            if let Some(texture) = overlay {
+                let uv = |p: Pos2| ((p - image_rect.min) / image_rect.size()).to_pos2();
+                ui.painter().image(
+                    texture,
+                    visible,
+                    Rect::from_min_max(uv(visible.min), uv(visible.max)),
+                    egui::Color32::WHITE,
+                );
+                error_map::legend(ui.painter(), rect, egui::Color32::WHITE);
+            }
         }
 
         let pos = response.hover_pos()?;
@@ -146,6 +164,12 @@ impl Viewport {
                 if let Some(v) = layer.values.get(index) {
                     ui.monospace(format!("{} {v:.6}", layer.name));
                 }
+            }
+            if let Some(v) = error
+                .filter(|e| (e.width, e.height) == (image.width, image.height))
+                .and_then(|e| e.per_pixel.get(index))
+            {
+                ui.monospace(format!("est. relMSE {v:.3e}"));
             }
         });
         Some(hovered)

@@ -178,6 +178,7 @@ fn bench_cancel(c: &mut Criterion) {
                     max_passes: None,
                     time_limit: None,
                     on_frame: None,
+                    target_rel_mse: None,
                 })
                 .unwrap();
                 std::thread::sleep(std::time::Duration::from_millis(150));

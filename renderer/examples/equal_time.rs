@@ -53,6 +53,7 @@ fn main() {
             max_passes: None,
             time_limit: Some(Duration::from_secs_f64(seconds)),
             on_frame: None,
+            target_rel_mse: None,
         })
         .expect("the session starts");
         session.wait()

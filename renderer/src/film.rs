@@ -2,7 +2,13 @@
 //! that grow without bound are f64/u64), one sample per pixel per pass, box filter.
 //! A pass is computed into its own buffer and merged only when complete, so a cancelled pass
 //! leaves the film as it was and the image stays a normalised estimate.
+//!
+//! Passes are independent estimates of every pixel, so the film also keeps what the
+//! remaining error is estimated from (`error_estimate`): each pixel's sum of squared pass
+//! values, whose spread gives the variance of the mean, and the sum over odd passes, which
+//! splits the passes into two independent halves for a robust estimate of the pixel's value.
 
+use crate::error_estimate::{self, ErrorEstimate, PixelError};
 use crate::image::Image;
 use glam::{DVec3, Vec3};
 
@@ -11,6 +17,8 @@ pub struct Film {
     pub width: usize,
     pub height: usize,
     sum: Vec<DVec3>,
+    sum_sq: Vec<DVec3>,
+    odd_sum: Vec<DVec3>,
     passes: u64,
 }
 
@@ -20,6 +28,8 @@ impl Film {
             width,
             height,
             sum: vec![DVec3::ZERO; width * height],
+            sum_sq: vec![DVec3::ZERO; width * height],
+            odd_sum: vec![DVec3::ZERO; width * height],
             passes: 0,
         }
     }
@@ -31,14 +41,46 @@ impl Film {
     /// Adds one complete pass (one estimate per pixel, row-major).
     pub fn add_pass(&mut self, pass: &[Vec3]) {
         debug_assert_eq!(pass.len(), self.sum.len());
-        for (s, v) in self.sum.iter_mut().zip(pass) {
+        let odd = self.passes % 2 == 1;
+        for (i, v) in pass.iter().enumerate() {
             debug_assert!(
                 v.is_finite() && v.min_element() >= 0.0,
                 "invalid sample {v} reached the film"
             );
-            *s += v.as_dvec3();
+            let v = v.as_dvec3();
+            self.sum[i] += v;
+            self.sum_sq[i] += v * v;
+            if odd {
+                self.odd_sum[i] += v;
+            }
         }
         self.passes += 1;
+    }
+
+    /// The remaining error of `image()`: per pixel, the sample variance of the passes over
+    /// their number (the passes are independent and identically distributed), divided by a
+    /// robust r^2 from the even and odd passes' means (`robust_reference_sq`). None before two
+    /// passes.
+    pub fn error_estimate(&self) -> Option<ErrorEstimate> {
+        if self.passes < 2 {
+            return None;
+        }
+        let n = self.passes;
+        let (n_odd, n_even) = ((n / 2) as f64, n.div_ceil(2) as f64);
+        let odd: Vec<DVec3> = self.odd_sum.iter().map(|s| *s / n_odd).collect();
+        let even: Vec<DVec3> = (self.sum.iter().zip(&self.odd_sum))
+            .map(|(s, o)| (*s - *o) / n_even)
+            .collect();
+        let reference_sq =
+            error_estimate::robust_reference_sq(&[odd, even], self.width, self.height);
+        let pixels: Vec<PixelError> = (0..self.sum.len())
+            .map(|i| PixelError {
+                variance: error_estimate::variance_of_mean(self.sum[i], self.sum_sq[i], n),
+                bias_sq: DVec3::ZERO,
+                reference_sq: reference_sq[i],
+            })
+            .collect();
+        ErrorEstimate::from_pixels(self.width, self.height, &pixels)
     }
 
     /// The mean of all passes so far (black before the first).

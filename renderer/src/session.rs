@@ -5,6 +5,7 @@
 //! Cancellation is checked per image row, so it takes effect within a fraction of a pass.
 
 use crate::camera::PerspectiveCamera;
+use crate::error_estimate::ErrorEstimate;
 use crate::image::Image;
 use crate::integrators::{
     self, Integrator, ParamValues, PassStats, PixelLayer, PlotSeries, RenderContext,
@@ -31,6 +32,8 @@ pub struct SessionConfig {
     pub max_passes: Option<u64>,
     /// Stop after the pass during which this much time has passed.
     pub time_limit: Option<Duration>,
+    /// Stop once the estimated remaining relMSE (`Frame::error`) falls below this.
+    pub target_rel_mse: Option<f64>,
     /// Called on the session's thread whenever a new frame is published (a viewer asks for a
     /// repaint here, so it redraws exactly when there is something new).
     pub on_frame: Option<FrameCallback>,
@@ -42,7 +45,7 @@ pub type FrameCallback = Arc<dyn Fn() + Send + Sync>;
 pub enum RunState {
     Running,
     Paused,
-    /// Reached its pass or time limit.
+    /// Reached its pass or time limit, or its target error.
     Finished,
     Cancelled,
 }
@@ -59,6 +62,9 @@ pub struct Frame {
     pub messages: Arc<Vec<String>>,
     /// The integrator's statistics as JSON, if it keeps any (MMLT's technique histogram).
     pub statistics: Arc<Option<serde_json::Value>>,
+    /// The image's remaining error estimated without a reference (None until the integrator
+    /// has enough samples to estimate it).
+    pub error: Arc<Option<ErrorEstimate>>,
     pub passes: u64,
     pub samples: u64,
     pub rays: u64,
@@ -132,6 +138,7 @@ impl Session {
                 pixel_layers: Arc::new(Vec::new()),
                 messages: Arc::new(Vec::new()),
                 statistics: Arc::new(None),
+                error: Arc::new(None),
                 passes: 0,
                 samples: 0,
                 rays: 0,
@@ -152,8 +159,11 @@ impl Session {
                     worker_shared,
                     integrator,
                     pool,
-                    config.max_passes,
-                    config.time_limit,
+                    Limits {
+                        passes: config.max_passes,
+                        time: config.time_limit,
+                        rel_mse: config.target_rel_mse,
+                    },
                     config.on_frame,
                 )
             })
@@ -254,6 +264,7 @@ struct Estimate {
     pixel_layers: Arc<Vec<PixelLayer>>,
     messages: Arc<Vec<String>>,
     statistics: Arc<Option<serde_json::Value>>,
+    error: Arc<Option<ErrorEstimate>>,
 }
 
 impl Estimate {
@@ -264,7 +275,29 @@ impl Estimate {
             pixel_layers: Arc::new(integrator.pixel_layers()),
             messages: Arc::new(integrator.messages()),
             statistics: Arc::new(integrator.statistics()),
+            error: Arc::new(integrator.error_estimate()),
         }
+    }
+}
+
+/// When a session stops by itself.
+struct Limits {
+    passes: Option<u64>,
+    time: Option<Duration>,
+    rel_mse: Option<f64>,
+}
+
+impl Limits {
+    fn reached(&self, passes: u64, elapsed: Duration, estimate: &Estimate) -> bool {
+        self.passes.is_some_and(|m| passes >= m)
+            || self.time.is_some_and(|t| elapsed >= t)
+            || self.rel_mse.is_some_and(|target| {
+                estimate
+                    .error
+                    .as_ref()
+                    .as_ref()
+                    .is_some_and(|e| e.rel_mse < target)
+            })
     }
 }
 
@@ -272,8 +305,7 @@ fn run(
     shared: Arc<Shared>,
     mut integrator: Box<dyn Integrator>,
     pool: rayon::ThreadPool,
-    max_passes: Option<u64>,
-    time_limit: Option<Duration>,
+    limits: Limits,
     on_frame: Option<FrameCallback>,
 ) {
     let start = Instant::now();
@@ -291,6 +323,7 @@ fn run(
             pixel_layers: estimate.pixel_layers.clone(),
             messages: estimate.messages.clone(),
             statistics: estimate.statistics.clone(),
+            error: estimate.error.clone(),
             passes,
             samples: totals.samples,
             rays: totals.rays,
@@ -309,7 +342,7 @@ fn run(
             publish(&estimate, passes, totals, elapsed, RunState::Cancelled);
             return;
         }
-        if max_passes.is_some_and(|m| passes >= m) || time_limit.is_some_and(|t| elapsed >= t) {
+        if limits.reached(passes, elapsed, &estimate) {
             publish(&estimate, passes, totals, elapsed, RunState::Finished);
             return;
         }

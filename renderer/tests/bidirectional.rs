@@ -31,6 +31,7 @@ fn render(
         max_passes: Some(passes),
         time_limit: None,
         on_frame: None,
+        target_rel_mse: None,
     })
     .unwrap();
     let frame = session.wait();
@@ -430,6 +431,7 @@ fn a_scene_whose_light_cannot_reach_the_camera_is_black_with_a_message() {
             max_passes: Some(4),
             time_limit: None,
             on_frame: None,
+            target_rel_mse: None,
         })
         .unwrap();
         let frame = session.wait();
@@ -511,6 +513,7 @@ fn bdpt_and_mmlt_images_do_not_depend_on_the_thread_count() {
                 max_passes: Some(6),
                 time_limit: None,
                 on_frame: None,
+                target_rel_mse: None,
             })
             .unwrap();
             (*session.wait().image).clone()

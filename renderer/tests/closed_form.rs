@@ -22,6 +22,7 @@ fn render(desc: SceneDescription, passes: u64, size: u32, threads: usize) -> Ima
         max_passes: Some(passes),
         time_limit: None,
         on_frame: None,
+        target_rel_mse: None,
     })
     .expect("session starts");
     let frame = session.wait();

@@ -51,6 +51,7 @@ fn render_mean(desc: SceneDescription, passes: u64) -> Vec<(&'static str, (f64, 
                 max_passes: Some(passes),
                 time_limit: None,
                 on_frame: None,
+                target_rel_mse: None,
             })
             .unwrap();
             let frame = session.wait();

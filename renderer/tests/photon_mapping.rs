@@ -29,6 +29,7 @@ fn render(
         max_passes: Some(passes),
         time_limit: None,
         on_frame: None,
+        target_rel_mse: None,
     })
     .unwrap();
     let frame = session.wait();

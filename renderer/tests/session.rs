@@ -20,6 +20,7 @@ fn config(passes: Option<u64>) -> SessionConfig {
         max_passes: passes,
         time_limit: None,
         on_frame: None,
+        target_rel_mse: None,
     }
 }
 

@@ -8,6 +8,7 @@ pub mod path;
 pub mod ppm;
 
 use crate::camera::PerspectiveCamera;
+use crate::error_estimate::ErrorEstimate;
 use crate::geometry::Ray;
 use crate::image::Image;
 use crate::material::{Bsdf, BsdfSample, TransportMode};
@@ -134,6 +135,11 @@ pub trait Integrator: Send {
     }
     /// Statistics worth saving beside the image (`caustica render --stats`).
     fn statistics(&self) -> Option<serde_json::Value> {
+        None
+    }
+    /// The remaining error of `image()` estimated from the integrator's own samples (see
+    /// `error_estimate`); None while there is too little to estimate it from.
+    fn error_estimate(&self) -> Option<ErrorEstimate> {
         None
     }
 }

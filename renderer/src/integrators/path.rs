@@ -4,6 +4,7 @@
 //! estimation alone. Russian roulette from the second bounce on, on the throughput with the
 //! refraction eta^2 factored out (pbrt-v4 section 13.4.4).
 
+use crate::error_estimate::ErrorEstimate;
 use crate::film::{Film, sanitize};
 use crate::geometry::Ray;
 use crate::image::Image;
@@ -124,6 +125,10 @@ impl Integrator for PathIntegrator {
 
     fn set_live_param(&mut self, _name: &str, _value: f64) -> bool {
         false
+    }
+
+    fn error_estimate(&self) -> Option<ErrorEstimate> {
+        self.film.error_estimate()
     }
 }
 

@@ -2,8 +2,10 @@
 //! sample, one camera subpath and one light subpath, joined by every connection strategy
 //! (s light vertices, t camera vertices) of each path length, weighted by the balance
 //! heuristic. Strategies with t = 1 land anywhere on the film: they are splatted into
-//! per-row buffers merged in row order, so the image depends only on the seed and the pass
-//! count, up to the order of the splats' floating-point sums (design.md section 6).
+//! per-row buffers merged in row order into the pass's own image, so the image depends only on
+//! the seed and the pass count, up to the order of the splats' floating-point sums (design.md
+//! section 6), and every pass, splats included, is an independent estimate of every pixel:
+//! the film estimates the remaining error from their spread, as for the path tracer.
 //!
 //! Paths end by Russian roulette on each bounce's throughput factor from the third vertex
 //! of a subpath on; MIS weights ignore it (every strategy stays unbiased and the weights
@@ -13,12 +15,13 @@ pub mod connect;
 pub mod subpath;
 pub mod vertex;
 
+use crate::error_estimate::ErrorEstimate;
 use crate::film::{Film, sanitize};
 use crate::image::Image;
 use crate::integrators::{Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext};
 use crate::sampling::sampler::Sampler;
 use connect::connect;
-use glam::{DVec3, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use subpath::{Termination, camera_subpath, light_subpath};
@@ -63,7 +66,6 @@ pub struct BdptIntegrator {
     ctx: RenderContext,
     settings: BdptSettings,
     film: Film,
-    splats: Vec<DVec3>,
     pass_buffer: Vec<Vec3>,
 }
 
@@ -74,7 +76,6 @@ impl BdptIntegrator {
             ctx,
             settings,
             film: Film::new(w, h),
-            splats: vec![DVec3::ZERO; w * h],
             pass_buffer: vec![Vec3::ZERO; w * h],
         }
     }
@@ -179,7 +180,7 @@ impl Integrator for BdptIntegrator {
         for r in rows {
             stats = stats + r.stats;
             for (i, v) in r.splats {
-                self.splats[i] += v.as_dvec3();
+                self.pass_buffer[i] += v;
             }
         }
         self.film.add_pass(&self.pass_buffer);
@@ -187,15 +188,14 @@ impl Integrator for BdptIntegrator {
     }
 
     fn image(&self) -> Image {
-        let mut img = self.film.image();
-        let inv = 1.0 / self.film.passes().max(1) as f64;
-        for (p, s) in img.pixels.iter_mut().zip(&self.splats) {
-            *p += (*s * inv).as_vec3();
-        }
-        img
+        self.film.image()
     }
 
     fn set_live_param(&mut self, _name: &str, _value: f64) -> bool {
         false
+    }
+
+    fn error_estimate(&self) -> Option<ErrorEstimate> {
+        self.film.error_estimate()
     }
 }

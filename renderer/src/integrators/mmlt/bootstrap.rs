@@ -1,7 +1,7 @@
 //! Bootstrap (Hachisuka et al. 2014, section 4.3; pbrt-v3 section 16.4.4): independent
 //! samples of every path length estimate the normalisation b = sum over k of b_k, the mean
 //! target value, and chains start from bootstrap samples drawn in proportion to their
-//! luminance, so they spread over path lengths as the image's energy does.
+//! luminance, so they spread over path lengths as the image's energy does (`seeding`).
 
 use crate::camera::PerspectiveCamera;
 use crate::integrators::Cancelled;
@@ -17,11 +17,12 @@ pub struct Bootstrap {
     pub b: f64,
     /// b_k per path length.
     pub per_length: Vec<f64>,
+    /// The mean of the squared target values per path length (for b_k's standard error).
+    pub per_length_mean_sq: Vec<f64>,
     /// Standard error of b from the samples' spread.
     pub standard_error: f64,
-    /// Chooses a bootstrap sample (index i (max_depth + 1) + k) by luminance; None if every
-    /// sample was black.
-    pub seeds: Option<Distribution1D>,
+    /// The target value (luminance) of every sample, at index i (max_depth + 1) + k.
+    pub luminance: Vec<f64>,
     pub rays: u64,
     pub dropped: u64,
 }
@@ -54,10 +55,12 @@ pub fn run(
         })
         .collect::<Result<_, _>>()?;
     let mut per_length = vec![0.0; lengths];
+    let mut per_length_mean_sq = vec![0.0; lengths];
     // Sample i of every length together is one sample of the sum over lengths.
     let mut sum_sq = 0.0;
     for (key, (y, _, _)) in results.iter().enumerate() {
         per_length[key % lengths] += y / samples as f64;
+        per_length_mean_sq[key % lengths] += y * y / samples as f64;
     }
     for i in 0..samples {
         let y: f64 = results[i * lengths..(i + 1) * lengths]
@@ -66,16 +69,55 @@ pub fn run(
             .sum();
         sum_sq += y * y;
     }
-    let weights: Vec<f64> = results.iter().map(|r| r.0).collect();
     let b = per_length.iter().sum::<f64>();
     let n = samples as f64;
     let variance = (sum_sq / n - b * b).max(0.0) * n / (n - 1.0).max(1.0);
     Ok(Bootstrap {
         b,
         per_length,
+        per_length_mean_sq,
         standard_error: (variance / n).sqrt(),
-        seeds: (b > 0.0).then(|| Distribution1D::new(&weights)),
+        luminance: results.iter().map(|r| r.0).collect(),
         rays: results.iter().map(|r| r.1).sum(),
         dropped: results.iter().filter(|r| r.2).count() as u64,
     })
+}
+
+/// Where the chains of one group start: bootstrap samples i = g, g + G, g + 2G, ... (all
+/// lengths), drawn in proportion to luminance. Groups drawing from disjoint samples start
+/// independently, which the error estimate needs: chains of different groups seeded from the
+/// same few bright paths (a hard scene, a small bootstrap) would agree with each other more
+/// than with the truth. A group whose samples are all black draws uniformly; its chains start
+/// at zero luminance and accept their first proposal.
+pub struct GroupSeeds {
+    group: usize,
+    groups: usize,
+    lengths: usize,
+    distribution: Distribution1D,
+}
+
+impl GroupSeeds {
+    pub fn new(luminance: &[f64], lengths: usize, group: usize, groups: usize) -> Self {
+        let samples = luminance.len() / lengths.max(1);
+        let weights: Vec<f64> = (group..samples)
+            .step_by(groups.max(1))
+            .flat_map(|i| (0..lengths).map(move |k| i * lengths + k))
+            .map(|key| luminance[key])
+            .collect();
+        GroupSeeds {
+            group,
+            groups: groups.max(1),
+            lengths,
+            distribution: Distribution1D::new(&weights),
+        }
+    }
+
+    /// The bootstrap sample (i, k) for a uniform number `u`; None if the group has no sample.
+    pub fn sample(&self, u: f32) -> Option<(usize, usize)> {
+        let (j, _) = self.distribution.sample(u)?;
+        Some((
+            (j / self.lengths) * self.groups + self.group,
+            j % self.lengths,
+        ))
+    }
 }

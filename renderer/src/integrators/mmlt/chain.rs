@@ -28,6 +28,7 @@ pub struct ChainOutput {
     /// Large steps' proposals are independent uniform samples of the chain's length: their
     /// target values refine the normalisation b_k (Kelemen et al. 2002, section 4).
     pub large_step_sum: f64,
+    pub large_step_sum_sq: f64,
     pub large_steps: u64,
     pub rays: u64,
     pub dropped: u64,
@@ -105,6 +106,7 @@ impl Chain {
             let y = proposed.luminance();
             if self.sampler.is_large_step() {
                 out.large_step_sum += y as f64;
+                out.large_step_sum_sq += (y as f64) * (y as f64);
                 out.large_steps += 1;
             }
             // A current state of zero luminance accepts any proposal (design.md section 5).

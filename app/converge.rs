@@ -1,0 +1,491 @@
+//! `caustica converge`: the speed/accuracy trade, measured. Runs each integrator (and each
+//! value of swept parameters) on one scene for the same time, records at log-spaced
+//! checkpoints of one progressive run the error against a reference (when given) and the
+//! error each frame estimates of itself, and writes `convergence.csv`, `convergence.png`
+//! (log-log error against time) and a table on stdout: which run wins at each time, and the
+//! fitted slope of each run's error.
+
+use crate::chart;
+use anyhow::{Context, anyhow};
+use caustica_renderer::image::{Image, compare, read_exr};
+use caustica_renderer::integrators::{self, ParamValues};
+use caustica_renderer::scene::{Scene, gltf};
+use caustica_renderer::session::{Frame, Session, SessionConfig};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Duration;
+
+#[derive(Args, Debug)]
+pub struct ConvergeArgs {
+    /// Scene to render (.gltf or .glb).
+    pub scene: PathBuf,
+    /// Converged image (EXR) of the same view and size, for the true error.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Integrators to compare (repeat the flag or separate with commas).
+    #[arg(long = "integrator", required = true, value_delimiter = ',', num_args = 1..)]
+    pub integrators: Vec<String>,
+    /// A parameter and the values to sweep, NAME=V1,V2,...; repeat for several (every
+    /// combination runs); integrators without that parameter run once.
+    #[arg(long = "param", value_name = "NAME=V1,V2...")]
+    pub params: Vec<String>,
+    /// Seconds each run renders.
+    #[arg(long, value_parser = crate::render::parse_seconds)]
+    pub time: f64,
+    /// Directory for convergence.csv and convergence.png (created if missing).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Image width [default: the reference's, else 256].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub width: Option<u32>,
+    /// Image height [default: the reference's, else from the width and the camera].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub height: Option<u32>,
+    /// Seed of every run.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Checkpoints per decade of time.
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub checkpoints_per_decade: u32,
+}
+
+/// One run: an integrator with its parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunSpec {
+    pub integrator: String,
+    /// The parameters given on the command line (the rest are the defaults).
+    pub given: ParamValues,
+}
+
+impl RunSpec {
+    pub fn label(&self) -> String {
+        let mut label = self.integrator.clone();
+        for (k, v) in &self.given {
+            label += &format!(" {k}={v}");
+        }
+        label
+    }
+}
+
+/// One checkpoint of a run.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Record {
+    pub run: String,
+    pub integrator: String,
+    pub parameters: String,
+    pub seconds: f64,
+    pub passes: u64,
+    pub rel_mse: Option<f64>,
+    pub rmse: Option<f64>,
+    pub estimated_rel_mse: Option<f64>,
+    pub estimated_bias_rel_mse: Option<f64>,
+}
+
+impl Record {
+    /// The error that ranks runs: the true one where known, else the estimate.
+    pub fn error(&self) -> Option<f64> {
+        self.rel_mse.or(self.estimated_rel_mse)
+    }
+}
+
+/// Parses `NAME=V1,V2,...`.
+fn parse_sweep(text: &str) -> Result<(String, Vec<f64>), String> {
+    let (name, values) = text
+        .split_once('=')
+        .ok_or_else(|| format!("--param {text}: expected NAME=V1,V2,..."))?;
+    let values = values
+        .split(',')
+        .map(|v| {
+            v.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("--param {text}: '{v}' is not a number"))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((name.trim().replace('-', "_"), values))
+}
+
+/// Every run the arguments ask for, each validated against its integrator's parameters.
+pub fn runs(integrators_given: &[String], sweeps: &[String]) -> Result<Vec<RunSpec>, String> {
+    let sweeps: Vec<(String, Vec<f64>)> = sweeps
+        .iter()
+        .map(|s| parse_sweep(s))
+        .collect::<Result<_, _>>()?;
+    let mut out = Vec::new();
+    for name in integrators_given {
+        let info = integrators::find(name).ok_or_else(|| {
+            let known: Vec<_> = integrators::registry().iter().map(|i| i.name).collect();
+            format!("--integrator {name}: unknown (known: {})", known.join(", "))
+        })?;
+        let mut combinations = vec![ParamValues::new()];
+        for (param, values) in &sweeps {
+            if !info.params.iter().any(|p| p.name == param) {
+                continue;
+            }
+            combinations = combinations
+                .iter()
+                .flat_map(|c| {
+                    values.iter().map(move |v| {
+                        let mut c = c.clone();
+                        c.insert(param.clone(), *v);
+                        c
+                    })
+                })
+                .collect();
+        }
+        for given in combinations {
+            integrators::resolve_params(info, &given)
+                .map_err(|e| format!("--param for {name}: {e}"))?;
+            out.push(RunSpec {
+                integrator: name.clone(),
+                given,
+            });
+        }
+    }
+    for (param, _) in &sweeps {
+        let used = out.iter().any(|r| r.given.contains_key(param));
+        if !used {
+            return Err(format!(
+                "--param {param}: none of the integrators has this parameter"
+            ));
+        }
+    }
+    Ok(out)
+}
+
+/// Checkpoint times, `per_decade` to a decade, ending at `total` and starting at a tenth of a
+/// second (or at total / 100 for runs shorter than ten seconds).
+pub fn checkpoints(total: f64, per_decade: u32) -> Vec<f64> {
+    let first = (total / 100.0).min(0.1);
+    let mut times = Vec::new();
+    let mut j = 0;
+    loop {
+        let t = total * 10f64.powf(-(j as f64) / per_decade as f64);
+        if t < first * 0.999 {
+            break;
+        }
+        times.push(t);
+        j += 1;
+    }
+    times.reverse();
+    times
+}
+
+fn record(spec: &RunSpec, frame: &Frame, reference: Option<&Image>) -> anyhow::Result<Record> {
+    let metrics = reference
+        .map(|r| compare(&frame.image, r))
+        .transpose()
+        .context("comparing with the reference")?;
+    let estimate = frame.error.as_ref().as_ref();
+    Ok(Record {
+        run: spec.label(),
+        integrator: spec.integrator.clone(),
+        parameters: spec
+            .given
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect::<Vec<_>>()
+            .join(" "),
+        seconds: frame.elapsed.as_secs_f64(),
+        passes: frame.passes,
+        rel_mse: metrics.map(|m| m.rel_mse),
+        rmse: metrics.map(|m| m.rmse),
+        estimated_rel_mse: estimate.map(|e| e.rel_mse),
+        estimated_bias_rel_mse: estimate.map(|e| e.bias_rel_mse),
+    })
+}
+
+/// Settings shared by every run.
+pub struct Measurement<'a> {
+    pub scene: Arc<Scene>,
+    pub reference: Option<&'a Image>,
+    pub width: u32,
+    pub height: u32,
+    pub seed: u64,
+    pub threads: usize,
+    pub seconds: f64,
+    pub checkpoints: Vec<f64>,
+}
+
+/// Renders one run for the measurement's time and records it at each checkpoint that a
+/// frame reached (a frame standing for several checkpoints is recorded once).
+pub fn measure(
+    m: &Measurement,
+    spec: &RunSpec,
+    progress: &dyn Fn(f64),
+) -> anyhow::Result<Vec<Record>> {
+    let session = Session::start(SessionConfig {
+        scene: m.scene.clone(),
+        integrator: spec.integrator.clone(),
+        params: spec.given.clone(),
+        width: m.width,
+        height: m.height,
+        seed: m.seed,
+        threads: m.threads,
+        max_passes: None,
+        time_limit: Some(Duration::from_secs_f64(m.seconds)),
+        on_frame: None,
+        target_rel_mse: None,
+    })
+    .map_err(|e| anyhow!("{}: {e}", spec.label()))?;
+    let mut records = Vec::new();
+    let mut next = 0;
+    let mut last_passes = 0;
+    loop {
+        let done = session.is_done();
+        let frame = session.frame();
+        let mut due = false;
+        while next < m.checkpoints.len()
+            && frame.passes > 0
+            && frame.elapsed.as_secs_f64() >= m.checkpoints[next]
+        {
+            due = true;
+            next += 1;
+        }
+        if (due || done) && frame.passes > last_passes {
+            records.push(record(spec, &frame, m.reference)?);
+            last_passes = frame.passes;
+        }
+        progress(frame.elapsed.as_secs_f64().min(m.seconds));
+        if done {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    Ok(records)
+}
+
+/// Least-squares slope of log error against log time over the records from `from` seconds on.
+pub fn fitted_slope(records: &[Record], from: f64) -> Option<f64> {
+    let points: Vec<(f64, f64)> = records
+        .iter()
+        .filter(|r| r.seconds >= from)
+        .filter_map(|r| r.error().filter(|e| *e > 0.0).map(|e| (r.seconds, e)))
+        .map(|(t, e)| (t.ln(), e.ln()))
+        .collect();
+    if points.len() < 2 {
+        return None;
+    }
+    let n = points.len() as f64;
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+    let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// The record of each run nearest to (at or after) time `t`, and the lowest error among them.
+pub fn winner_at(runs: &[Vec<Record>], t: f64) -> Option<(usize, f64)> {
+    runs.iter()
+        .enumerate()
+        .filter_map(|(i, records)| {
+            records
+                .iter()
+                .find(|r| r.seconds >= t * 0.999)
+                .and_then(Record::error)
+                .map(|e| (i, e))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+fn image_size(args: &ConvergeArgs, scene: &Scene, reference: Option<&Image>) -> (u32, u32) {
+    if let Some(r) = reference {
+        return (
+            args.width.unwrap_or(r.width as u32),
+            args.height.unwrap_or(r.height as u32),
+        );
+    }
+    crate::render::output_size(
+        Some(args.width.unwrap_or(256)),
+        args.height,
+        scene.camera.aspect,
+    )
+}
+
+pub fn run(args: &ConvergeArgs) -> Result<(), crate::render::Failure> {
+    use crate::render::Failure;
+    let specs = runs(&args.integrators, &args.params).map_err(Failure::Usage)?;
+    let reference = args
+        .reference
+        .as_ref()
+        .map(|p| read_exr(p).map(|(image, _)| image))
+        .transpose()
+        .map_err(|e| anyhow!("reference: {e}"))?;
+    let scene = Arc::new(gltf::load(&args.scene).map_err(|e| anyhow!(e))?);
+    let (width, height) = image_size(args, &scene, reference.as_ref());
+    if let Some(r) = &reference
+        && (r.width as u32, r.height as u32) != (width, height)
+    {
+        return Err(Failure::Usage(format!(
+            "--reference {}: it is {}x{}, the runs {width}x{height}",
+            args.reference.as_deref().unwrap_or(Path::new("")).display(),
+            r.width,
+            r.height
+        )));
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("{}: cannot create the directory", args.out.display()))?;
+    let m = Measurement {
+        scene,
+        reference: reference.as_ref(),
+        width,
+        height,
+        seed: args.seed,
+        threads: args.threads,
+        seconds: args.time,
+        checkpoints: checkpoints(args.time, args.checkpoints_per_decade),
+    };
+    let total = args.time * specs.len() as f64;
+    let bar = ProgressBar::new((total * 10.0).ceil() as u64).with_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut all = Vec::new();
+    for (i, spec) in specs.iter().enumerate() {
+        bar.set_message(format!("{} ({}/{})", spec.label(), i + 1, specs.len()));
+        let done_before = args.time * i as f64;
+        let records = measure(&m, spec, &|t| bar.set_position(((done_before + t) * 10.0) as u64))?;
+        all.push(records);
+    }
+    bar.finish_and_clear();
+
+    let csv_path = args.out.join("convergence.csv");
+    write_csv(&csv_path, &all)?;
+    let png_path = args.out.join("convergence.png");
+    let title = format!(
+        "{} at {width} x {height}",
+        args.scene.file_name().unwrap_or_default().to_string_lossy()
+    );
+    chart::draw_convergence(&png_path, &title, &all, reference.is_some())
+        .map_err(|e| anyhow!("{}: cannot draw the plot: {e}", png_path.display()))?;
+    print!("{}", summary(&all, &m.checkpoints, reference.is_some()));
+    eprintln!("wrote {} and {}", csv_path.display(), png_path.display());
+    Ok(())
+}
+
+fn write_csv(path: &Path, all: &[Vec<Record>]) -> anyhow::Result<()> {
+    let mut w = csv::Writer::from_path(path)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    for r in all.iter().flatten() {
+        w.serialize(r)
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
+    w.flush()
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    Ok(())
+}
+
+/// The table printed at the end: per run, its last record and fitted slope; then the winner
+/// at each decade of time (and at the end).
+pub fn summary(all: &[Vec<Record>], checkpoints: &[f64], have_reference: bool) -> String {
+    let what = if have_reference {
+        "relMSE"
+    } else {
+        "estimated relMSE"
+    };
+    let mut out = format!(
+        "{:<28} {:>8} {:>9} {:>12} {:>12} {:>8} {:>7}\n",
+        "run", "seconds", "passes", "relMSE", "estimated", "est/true", "slope"
+    );
+    let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3e}"));
+    for records in all {
+        let Some(last) = records.last() else { continue };
+        let ratio = match (last.estimated_rel_mse, last.rel_mse) {
+            (Some(e), Some(t)) if t > 0.0 => format!("{:.2}", e / t),
+            _ => "-".into(),
+        };
+        let from = (last.seconds / 10.0).min(1.0);
+        out += &format!(
+            "{:<28} {:>8.1} {:>9} {:>12} {:>12} {:>8} {:>7}\n",
+            last.run,
+            last.seconds,
+            last.passes,
+            fmt(last.rel_mse),
+            fmt(last.estimated_rel_mse),
+            ratio,
+            fitted_slope(records, from).map_or("-".into(), |s| format!("{s:.2}"))
+        );
+    }
+    out += &format!("lowest {what}:\n");
+    let mut shown = Vec::new();
+    for &t in checkpoints {
+        // One line a decade, and the last checkpoint.
+        let decade = t.log10().floor();
+        if shown.contains(&decade) && t != *checkpoints.last().unwrap_or(&t) {
+            continue;
+        }
+        shown.push(decade);
+        if let Some((i, e)) = winner_at(all, t) {
+            out += &format!("  at {t:>8.2} s: {} ({e:.3e})\n", all[i][0].run);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sweeps_expand_per_integrator_and_bad_ones_are_refused() {
+        let runs = runs(
+            &["pt".into(), "sppm".into()],
+            &["alpha=0.5,1".into(), "max-depth=5".into()],
+        )
+        .unwrap();
+        let labels: Vec<String> = runs.iter().map(RunSpec::label).collect();
+        assert_eq!(
+            labels,
+            [
+                "pt max_depth=5",
+                "sppm alpha=0.5 max_depth=5",
+                "sppm alpha=1 max_depth=5"
+            ]
+        );
+        assert!(super::runs(&["pt".into()], &["alpha=0.5".into()]).is_err());
+        assert!(super::runs(&["sppm".into()], &["alpha=2".into()]).is_err());
+        assert!(super::runs(&["sppm".into()], &["alpha".into()]).is_err());
+        assert!(super::runs(&["nope".into()], &[]).is_err());
+    }
+
+    #[test]
+    fn checkpoints_are_log_spaced_and_end_at_the_total() {
+        let c = checkpoints(60.0, 3);
+        // 60 s down by thirds of a decade to the last one above 0.1 s: 60 10^(-8/3).
+        assert_eq!(c.len(), 9);
+        assert!((c[0] - 60.0 * 10f64.powf(-8.0 / 3.0)).abs() < 1e-12, "{c:?}");
+        assert!((c.last().unwrap() - 60.0).abs() < 1e-9);
+        assert!(c.windows(2).all(|w| (w[1] / w[0] - 10f64.powf(1.0 / 3.0)).abs() < 1e-9));
+        assert!((checkpoints(2.0, 1)[0] - 0.02).abs() < 1e-12);
+    }
+
+    #[test]
+    fn slopes_and_winners_follow_the_records() {
+        let rec = |run: &str, t: f64, e: f64| Record {
+            run: run.into(),
+            integrator: run.into(),
+            parameters: String::new(),
+            seconds: t,
+            passes: 1,
+            rel_mse: Some(e),
+            rmse: None,
+            estimated_rel_mse: None,
+            estimated_bias_rel_mse: None,
+        };
+        let a: Vec<Record> = [1.0, 10.0, 100.0].iter().map(|t| rec("a", *t, 1.0 / t)).collect();
+        let b: Vec<Record> = [1.0, 10.0, 100.0]
+            .iter()
+            .map(|t| rec("b", *t, 0.1 / t.sqrt()))
+            .collect();
+        assert!((fitted_slope(&a, 0.0).unwrap() + 1.0).abs() < 1e-9);
+        assert!((fitted_slope(&b, 0.0).unwrap() + 0.5).abs() < 1e-9);
+        let all = [a, b];
+        assert_eq!(winner_at(&all, 1.0).map(|w| w.0), Some(1));
+        assert_eq!(winner_at(&all, 100.0).map(|w| w.0), Some(0));
+    }
+}
