@@ -114,15 +114,20 @@ pub fn variance_of_mean(sum: DVec3, sum_sq: DVec3, n: u64) -> DVec3 {
 /// Estimates of r^2 for every pixel from independent partial estimates of the whole image
 /// (halves of the passes, groups of chains), each scaled to estimate the full image.
 ///
-/// Per channel, r = min(x, max(m, m3)): x the mean of the parts (the image), m their lower
-/// median (the minimum of two), m3 the lower median of the parts averaged over the pixel's
-/// 3 x 3 neighbourhood. Each term answers one way a plug-in r fails:
-/// - a firefly or a lingering Markov chain lands in one part only, so m and m3 stay near r
-///   where x is far above it (x^2 would hide the very error the outlier causes);
+/// Per channel, r = min(x, max(m, m3, x3)): x the mean of the parts (the image), m their
+/// lower median (the minimum of two), m3 the lower median of the parts averaged over the
+/// pixel's 3 x 3 neighbourhood, x3 the median of x over that neighbourhood. Each term answers
+/// one way a plug-in r fails:
+/// - a firefly or a lingering Markov chain lands in one part and one pixel only, so m, m3 and
+///   x3 all stay near r where x is far above it (x^2 would hide the very error the outlier
+///   causes);
+/// - early on every part is noisy, and the minimum of noisy parts falls below r (with two
+///   passes, far below): the neighbourhood's median x3 is three times less noisy and unbiased
+///   where the image is locally flat;
 /// - where the signal itself is rare (a pixel that sees a light through glass in a few passes
-///   only; Metropolis chains, early, with no sample yet in most parts) m is near zero and would
-///   make the error look a hundred times larger than it is; the neighbourhood's parts hold
-///   enough samples for m3 to stand for the pixel instead;
+///   only; Metropolis chains, early, with no sample yet at most pixels of a part) m and x3 are
+///   near zero and would make the error look a hundred times larger than it is; the
+///   neighbourhood's mean in each part holds enough samples for m3 to stand for the pixel;
 /// - across an edge the neighbourhood mixes both sides and m3 lends a dark pixel its bright
 ///   neighbours' radiance, which the minimum with x (the pixel's own mean) takes back.
 pub fn robust_reference_sq(parts: &[Vec<DVec3>], width: usize, height: usize) -> Vec<DVec3> {
@@ -134,6 +139,10 @@ pub fn robust_reference_sq(parts: &[Vec<DVec3>], width: usize, height: usize) ->
         .iter()
         .map(|part| box_filter_3x3(part, width, height))
         .collect();
+    let mean: Vec<DVec3> = (0..count)
+        .map(|i| parts.iter().map(|p| p[i].max(DVec3::ZERO)).sum::<DVec3>() / parts.len() as f64)
+        .collect();
+    let median = median_filter_3x3(&mean, width, height);
     let rank = (parts.len() - 1) / 2;
     let lower_median = |parts: &[Vec<DVec3>], i: usize, c: usize| {
         let mut v: Vec<f64> = parts.iter().map(|p| p[i][c].max(0.0)).collect();
@@ -143,8 +152,10 @@ pub fn robust_reference_sq(parts: &[Vec<DVec3>], width: usize, height: usize) ->
     (0..count)
         .map(|i| {
             let channel = |c: usize| {
-                let x = parts.iter().map(|p| p[i][c].max(0.0)).sum::<f64>() / parts.len() as f64;
-                x.min(lower_median(parts, i, c).max(lower_median(&smoothed, i, c)))
+                let robust = lower_median(parts, i, c)
+                    .max(lower_median(&smoothed, i, c))
+                    .max(median[i][c]);
+                mean[i][c].min(robust)
             };
             let r = DVec3::new(channel(0), channel(1), channel(2));
             r * r
@@ -152,8 +163,32 @@ pub fn robust_reference_sq(parts: &[Vec<DVec3>], width: usize, height: usize) ->
         .collect()
 }
 
+/// Per channel, the median over each pixel's 3 x 3 neighbourhood (clipped at the borders;
+/// the lower median of an even count).
+fn median_filter_3x3(image: &[DVec3], width: usize, height: usize) -> Vec<DVec3> {
+    let mut out = vec![DVec3::ZERO; image.len()];
+    let mut values: Vec<f64> = Vec::with_capacity(9);
+    for y in 0..height {
+        for x in 0..width {
+            let mut m = DVec3::ZERO;
+            for c in 0..3 {
+                values.clear();
+                for yy in y.saturating_sub(1)..(y + 2).min(height) {
+                    for xx in x.saturating_sub(1)..(x + 2).min(width) {
+                        values.push(image[yy * width + xx][c]);
+                    }
+                }
+                values.sort_by(f64::total_cmp);
+                m[c] = values[(values.len() - 1) / 2];
+            }
+            out[y * width + x] = m;
+        }
+    }
+    out
+}
+
 /// The mean over each pixel's 3 x 3 neighbourhood (clipped at the borders).
-fn box_filter_3x3(image: &[DVec3], width: usize, height: usize) -> Vec<DVec3> {
+pub fn box_filter_3x3(image: &[DVec3], width: usize, height: usize) -> Vec<DVec3> {
     let mut out = vec![DVec3::ZERO; image.len()];
     for y in 0..height {
         for x in 0..width {

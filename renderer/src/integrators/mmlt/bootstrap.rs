@@ -83,41 +83,69 @@ pub fn run(
     })
 }
 
-/// Where the chains of one group start: bootstrap samples i = g, g + G, g + 2G, ... (all
-/// lengths), drawn in proportion to luminance. Groups drawing from disjoint samples start
-/// independently, which the error estimate needs: chains of different groups seeded from the
-/// same few bright paths (a hard scene, a small bootstrap) would agree with each other more
-/// than with the truth. A group whose samples are all black draws uniformly; its chains start
-/// at zero luminance and accept their first proposal.
-pub struct GroupSeeds {
-    group: usize,
-    groups: usize,
+/// Where chains start: first a path length for each chain, drawn in proportion to luminance
+/// over all bootstrap samples (so chains spread over lengths as the image's energy does);
+/// then, per group of chains (module `mmlt`), a bootstrap sample of that length from the
+/// group's own disjoint share of the samples (i = g, g + G, g + 2G, ...), again in proportion
+/// to luminance. The first step is shared, so every group gets the same number of chains of
+/// each length (to one); the second is not, so groups start independently, which the error
+/// estimate needs: chains of different groups seeded from the same few bright paths (a hard
+/// scene, a small bootstrap) would agree with each other more than with the truth.
+pub struct Seeding {
     lengths: usize,
-    distribution: Distribution1D,
+    groups: usize,
+    all: Distribution1D,
+    /// Per group g and length k (index g lengths + k): over the group's samples of length k,
+    /// None if they are all black.
+    shares: Vec<Option<Distribution1D>>,
+    /// Per length: over all samples of that length.
+    per_length: Vec<Distribution1D>,
 }
 
-impl GroupSeeds {
-    pub fn new(luminance: &[f64], lengths: usize, group: usize, groups: usize) -> Self {
+impl Seeding {
+    pub fn new(luminance: &[f64], lengths: usize, groups: usize) -> Self {
+        let groups = groups.max(1);
         let samples = luminance.len() / lengths.max(1);
-        let weights: Vec<f64> = (group..samples)
-            .step_by(groups.max(1))
-            .flat_map(|i| (0..lengths).map(move |k| i * lengths + k))
-            .map(|key| luminance[key])
+        let lit = |w: &[f64]| w.iter().any(|&y| y.is_finite() && y > 0.0);
+        let shares = (0..groups * lengths)
+            .map(|index| {
+                let (g, k) = (index / lengths, index % lengths);
+                let weights: Vec<f64> = (g..samples)
+                    .step_by(groups)
+                    .map(|i| luminance[i * lengths + k])
+                    .collect();
+                lit(&weights).then(|| Distribution1D::new(&weights))
+            })
             .collect();
-        GroupSeeds {
-            group,
-            groups: groups.max(1),
+        let per_length = (0..lengths)
+            .map(|k| {
+                let weights: Vec<f64> = (0..samples).map(|i| luminance[i * lengths + k]).collect();
+                Distribution1D::new(&weights)
+            })
+            .collect();
+        Seeding {
             lengths,
-            distribution: Distribution1D::new(&weights),
+            groups,
+            all: Distribution1D::new(luminance),
+            shares,
+            per_length,
         }
     }
 
-    /// The bootstrap sample (i, k) for a uniform number `u`; None if the group has no sample.
-    pub fn sample(&self, u: f32) -> Option<(usize, usize)> {
-        let (j, _) = self.distribution.sample(u)?;
-        Some((
-            (j / self.lengths) * self.groups + self.group,
-            j % self.lengths,
-        ))
+    /// A path length for a uniform number `u`.
+    pub fn length(&self, u: f32) -> usize {
+        self.all.sample(u).map_or(0, |(key, _)| key % self.lengths)
+    }
+
+    /// The bootstrap sample i of length k that a chain of group g starts from, for a uniform
+    /// number `u`. A share with no light at that length (rare lengths, small bootstraps)
+    /// falls back to a draw over all samples of the length, shared with the other groups.
+    pub fn start(&self, group: usize, k: usize, u: f32) -> usize {
+        match &self.shares[group * self.lengths + k] {
+            Some(share) => share
+                .sample(u)
+                .map_or(group, |(j, _)| j * self.groups + group),
+            None => self.per_length[k].sample(u).map_or(group, |(i, _)| i),
+        }
     }
 }

@@ -7,9 +7,10 @@
 //! A pass is width x height steps shared equally among the chains; chains run in parallel
 //! and their splats are merged in chain order.
 //!
-//! The chains are dealt into `CHAIN_GROUPS` groups (chain c into group c mod G), each seeded
-//! from its own disjoint share of the bootstrap samples (`bootstrap::GroupSeeds`), so that the
-//! groups are independent estimates of the image; the image is their mean. Every estimate is
+//! The chains are dealt into `CHAIN_GROUPS` groups with the same mix of path lengths, each
+//! group's chains starting from its own disjoint share of the bootstrap samples
+//! (`bootstrap::Seeding`), so that the groups are independent and identically distributed
+//! estimates of the image; the image is their mean. Every estimate is
 //! normalised (pbrt-v3 section 16.4.4: b over the steps per pixel) per path length: in group
 //! g, a pass's splats from a chain of length k carry weight b_k / c_{k,g}, c_{k,g} the group's
 //! number of chains of that length, so the image does not depend on how the random seeding
@@ -26,8 +27,10 @@
 //! (batch means over independent chains rather than over time, which would need batches
 //! longer than the chains' memory). Seeding every group from the same bootstrap samples, as
 //! first built, made them agree with each other more than with the truth: on the door scene
-//! with 10^4 bootstrap samples per length, the estimate was a ninth of the true error; with
-//! disjoint seeds it is within 25 %. What the groups share, the normalisation b, adds its own
+//! with 10^4 bootstrap samples per length, the estimate was a ninth of the true error. Seeding
+//! each from its own share but letting each draw its own mix of lengths made them disagree
+//! more: a group with one chain of a length weighs it as much as one with a hundred (a
+//! noisier image, and an estimate up to three times the error). What the groups share, the normalisation b, adds its own
 //! relative variance times x^2: the bootstrap's and large steps' spread of target values per
 //! length over their count.
 
@@ -143,8 +146,9 @@ enum Phase {
     /// Nothing reaches the camera: every bootstrap sample was black.
     Black,
     Running {
-        /// Chain c belongs to group c mod `groups`.
         chains: Vec<Chain>,
+        /// The group of each chain.
+        chain_groups: Vec<usize>,
         /// c_{k,g}: chains of each length in each group ([g][k]).
         chains_per_length: Vec<Vec<u64>>,
         groups: usize,
@@ -159,7 +163,7 @@ pub struct MmltIntegrator {
     ctx: RenderContext,
     settings: MmltSettings,
     phase: Phase,
-    /// Weighted splats of each group of chains (chain c in group c mod CHAIN_GROUPS).
+    /// Weighted splats of each group of chains.
     group_splats: Vec<Vec<DVec3>>,
     steps: u64,
     steps_per_chain: u64,
@@ -243,35 +247,49 @@ impl MmltIntegrator {
         }
         let lengths = max_depth + 1;
         let groups = CHAIN_GROUPS.min(self.settings.chains as usize);
-        let seeds: Vec<bootstrap::GroupSeeds> = (0..groups)
-            .map(|g| bootstrap::GroupSeeds::new(&boot.luminance, lengths, g, groups))
-            .collect();
-        let chains: Vec<(Chain, u64)> = (0..self.settings.chains)
-            .into_par_iter()
-            .map_init(Subpaths::default, |scratch, c| {
+        let seeding = bootstrap::Seeding::new(&boot.luminance, lengths, groups);
+        // Every chain's length first; chains of each length are then dealt to the groups in
+        // turn, so that all groups get the same mix of lengths.
+        let mut picks: Vec<Sampler> = (0..self.settings.chains)
+            .map(|c| {
                 let mut pick = Sampler::new(seed ^ CHAIN_SEEDING);
                 pick.start_pixel_sample(c, 0);
-                let (i, k) = seeds[c as usize % groups]
-                    .sample(pick.get_1d())
-                    .unwrap_or((c as usize % groups, 0));
+                pick
+            })
+            .collect();
+        let mut dealt = vec![0usize; lengths];
+        let assignments: Vec<(usize, usize, f32)> = picks
+            .iter_mut()
+            .map(|pick| {
+                let k = seeding.length(pick.get_1d());
+                let group = dealt[k] % groups;
+                dealt[k] += 1;
+                (group, k, pick.get_1d())
+            })
+            .collect();
+        let chains: Vec<(Chain, usize, u64)> = assignments
+            .par_iter()
+            .enumerate()
+            .map_init(Subpaths::default, |scratch, (c, &(group, k, u))| {
+                let i = seeding.start(group, k, u);
                 let mut rays = 0;
                 let chain = Chain::start(
                     scene,
                     camera,
                     seed,
                     bootstrap::bootstrap_key(i, k, max_depth),
-                    CHAIN_KEYS + c,
+                    CHAIN_KEYS + c as u64,
                     k,
                     scratch,
                     &mut rays,
                 );
-                (chain, rays)
+                (chain, group, rays)
             })
             .collect();
-        stats.rays += chains.iter().map(|c| c.1).sum::<u64>();
+        stats.rays += chains.iter().map(|c| c.2).sum::<u64>();
         let mut per_length = vec![vec![0u64; lengths]; groups];
-        for (c, (chain, _)) in chains.iter().enumerate() {
-            per_length[c % groups][chain.k] += 1;
+        for (chain, group, _) in &chains {
+            per_length[*group][chain.k] += 1;
         }
         // Each group's image misses the lengths it has no chain of; the image, their mean,
         // misses the mean share.
@@ -288,6 +306,7 @@ impl MmltIntegrator {
         self.b_standard_error = boot.standard_error;
         let samples = self.settings.bootstrap;
         self.phase = Phase::Running {
+            chain_groups: chains.iter().map(|c| c.1).collect(),
             chains: chains.into_iter().map(|c| c.0).collect(),
             chains_per_length: per_length,
             groups,
@@ -311,8 +330,9 @@ impl Integrator for MmltIntegrator {
         }
         let Phase::Running {
             chains,
+            chain_groups,
             chains_per_length,
-            groups,
+            groups: _,
             b_sum,
             b_sum_sq,
             b_count,
@@ -356,7 +376,7 @@ impl Integrator for MmltIntegrator {
             .map(|k| b_sum[k] / b_count[k] as f64)
             .collect();
         for (c, ((out, histogram), chain)) in results.into_iter().zip(chains.iter()).enumerate() {
-            let g = c % *groups;
+            let g = chain_groups[c];
             let weight = b[chain.k] / chains_per_length[g][chain.k].max(1) as f64;
             let group = &mut self.group_splats[g];
             for (i, v) in out.splats {

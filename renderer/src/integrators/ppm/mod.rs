@@ -710,8 +710,29 @@ impl Integrator for PhotonMapper {
             .iter()
             .map(|p| (p.estimate_sum - p.odd_estimate_sum) / n_even)
             .collect();
-        let reference_sq =
-            error_estimate::robust_reference_sq(&[odd, even], image.width, image.height);
+        let (w, h) = (image.width, image.height);
+        let robust = error_estimate::robust_reference_sq(&[odd, even], w, h);
+        // The kernel bias lifts x on the dark side of every edge, just where the squared bias
+        // is largest relative to r^2: r is taken below x by the bias estimate there (averaged
+        // over the neighbourhood, as the estimate itself is three times noisier than x).
+        let bias: Vec<DVec3> = self
+            .pixels
+            .iter()
+            .map(|p| p.bias_sum / n as f64)
+            .collect();
+        let bias = error_estimate::box_filter_3x3(&bias, w, h);
+        let reference_sq: Vec<DVec3> = (0..self.pixels.len())
+            .map(|i| {
+                let r = robust[i]
+                    .to_array()
+                    .map(f64::sqrt)
+                    .into_iter()
+                    .zip((image.pixels[i].as_dvec3() - bias[i]).to_array())
+                    .map(|(r, corrected)| r.min(corrected.max(0.0)))
+                    .collect::<Vec<f64>>();
+                DVec3::new(r[0] * r[0], r[1] * r[1], r[2] * r[2])
+            })
+            .collect();
         let mut pixels: Vec<PixelError> = self
             .pixels
             .iter()

@@ -1,0 +1,154 @@
+//! What several test files share: scenes with closed-form radiance and the helpers that
+//! compute it. (Each test file compiles this module on its own; not every file uses all of it.)
+#![allow(dead_code)]
+
+use caustica_renderer::image::Image;
+use caustica_renderer::scene::SceneDescription;
+
+/// A diffuse floor (y = 0) lit by a point light of intensity I at height 1 both directly and
+/// through a perfect mirror facing down at height 2: the mirror's image of the light, at
+/// height H = 3, gives the floor an irradiance E(x) = I H / (H^2 + |x|^2)^(3/2) that reaches
+/// the camera only through photons (light, mirror, floor), and whose curvature is known. With
+/// max depth 2 no other photon path deposits (light, floor, mirror would need a third hit).
+pub struct MirroredLight {
+    pub desc: SceneDescription,
+    pub intensity: f64,
+    pub albedo: f64,
+}
+
+impl MirroredLight {
+    pub const IMAGE_HEIGHT: f64 = 3.0;
+
+    pub fn new() -> Self {
+        use caustica_renderer::material::Material;
+        use caustica_renderer::procedural::{camera_looking, quad};
+        use caustica_renderer::scene::PunctualLightDesc;
+        use glam::Vec3;
+        let v = Vec3::new;
+        let s = 20.0;
+        let (intensity, albedo) = (10.0, 0.5);
+        let desc = SceneDescription {
+            meshes: vec![
+                quad(
+                    "floor",
+                    [v(-s, 0., s), v(s, 0., s), v(s, 0., -s), v(-s, 0., -s)],
+                    0,
+                ),
+                quad(
+                    "mirror",
+                    [v(-s, 2., -s), v(s, 2., -s), v(s, 2., s), v(-s, 2., s)],
+                    1,
+                ),
+            ],
+            materials: vec![
+                Material::diffuse(Vec3::splat(albedo as f32)),
+                Material {
+                    roughness: 0.0,
+                    ..Material::default()
+                },
+            ],
+            lights: vec![PunctualLightDesc::Point {
+                position: v(0., 1., 0.),
+                intensity: Vec3::splat(intensity as f32),
+            }],
+            // Sees the floor within 0.05 of the light's foot.
+            camera: Some(camera_looking(v(0., 1.5, 0.), v(0., 0., 0.), 3.8)),
+            ..Default::default()
+        };
+        MirroredLight {
+            desc,
+            intensity,
+            albedo,
+        }
+    }
+
+    /// Irradiance from the light's mirror image at distance `d` from its foot.
+    pub fn mirrored_irradiance(&self, d: f64) -> f64 {
+        let h = Self::IMAGE_HEIGHT;
+        let q = h * h + d * d;
+        self.intensity * h / (q * q.sqrt())
+    }
+
+    /// The exact radiance the mirror contributes, averaged over pixels seeing `footprints`.
+    pub fn mirrored_radiance(&self, footprints: &[glam::DVec2]) -> f64 {
+        self.albedo / std::f64::consts::PI
+            * footprints
+                .iter()
+                .map(|x| self.mirrored_irradiance(x.length()))
+                .sum::<f64>()
+            / footprints.len() as f64
+    }
+
+    /// Direct irradiance at distance `d` from the light's foot.
+    pub fn direct_irradiance(&self, d: f64) -> f64 {
+        self.intensity / (1.0 + d * d).powf(1.5)
+    }
+
+    /// The mean of the mirrored irradiance over the disc of radius `r` about `x`: the expected
+    /// value of a photon density estimate with a uniform kernel of that radius. Midpoint rule
+    /// in the radius, the trapezoid rule (spectrally accurate for periodic integrands) in angle.
+    pub fn disc_mean(&self, x: glam::DVec2, r: f64) -> f64 {
+        let (nr, nphi) = (16, 16);
+        let mut sum = 0.0;
+        for i in 0..nr {
+            let rho = r * (i as f64 + 0.5) / nr as f64;
+            for j in 0..nphi {
+                let phi = std::f64::consts::TAU * j as f64 / nphi as f64;
+                let p = x + rho * glam::DVec2::new(phi.cos(), phi.sin());
+                sum += self.mirrored_irradiance(p.length()) * rho;
+            }
+        }
+        sum * (r / nr as f64) * (std::f64::consts::TAU / nphi as f64)
+            / (std::f64::consts::PI * r * r)
+    }
+
+    /// Where each pixel's centre sees the floor, as an offset from the light's foot.
+    pub fn pixel_footprints(
+        &self,
+        camera: &caustica_renderer::camera::PerspectiveCamera,
+    ) -> Vec<glam::DVec2> {
+        let (w, h) = (camera.width, camera.height);
+        (0..w * h)
+            .map(|i| {
+                let film = glam::Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+                let ray = camera.generate_ray(film);
+                let t = -ray.o.y / ray.d.y;
+                let p = ray.o + t * ray.d;
+                glam::DVec2::new(p.x as f64, p.z as f64)
+            })
+            .collect()
+    }
+}
+
+impl MirroredLight {
+    /// The exact image: each pixel's radiance (direct and through the mirror) averaged over
+    /// `n` x `n` points of the pixel (the radiance is smooth, so 4 x 4 is exact to 1e-5).
+    pub fn reference_image(&self, camera: &caustica_renderer::camera::PerspectiveCamera, n: u32) -> Image {
+        let (w, h) = (camera.width, camera.height);
+        let pixels = (0..w * h)
+            .map(|i| {
+                let mut sum = 0.0;
+                for sy in 0..n {
+                    for sx in 0..n {
+                        let film = glam::Vec2::new(
+                            (i % w) as f32 + (sx as f32 + 0.5) / n as f32,
+                            (i / w) as f32 + (sy as f32 + 0.5) / n as f32,
+                        );
+                        let ray = camera.generate_ray(film);
+                        let t = -ray.o.y / ray.d.y;
+                        let p = ray.o + t * ray.d;
+                        let d = glam::DVec2::new(p.x as f64, p.z as f64).length();
+                        sum += self.albedo / std::f64::consts::PI
+                            * (self.direct_irradiance(d) + self.mirrored_irradiance(d));
+                    }
+                }
+                glam::Vec3::splat((sum / (n * n) as f64) as f32)
+            })
+            .collect();
+        Image {
+            width: w as usize,
+            height: h as usize,
+            pixels,
+        }
+    }
+}
