@@ -260,21 +260,26 @@ mod tests {
         a[4] = DVec3::splat(90.0);
         let r = robust_reference_sq(&[a, flat(0.5)], 3, 3);
         assert!((r[4].x - 0.25).abs() < 1e-9, "{}", r[4]);
-        // Four groups, one far off: the lower median of the other three.
+        // Four groups, one far off at the centre of a flat neighbourhood of 2: the lower median.
         let parts: Vec<Vec<DVec3>> = [1.0, 40.0, 2.0, 3.0]
             .iter()
-            .map(|v| vec![DVec3::splat(*v)])
+            .map(|v| {
+                let mut part = flat(2.0);
+                part[4] = DVec3::splat(*v);
+                part
+            })
             .collect();
-        assert!((robust_reference_sq(&parts, 1, 1)[0].x - 4.0).abs() < 1e-9);
-        // Sparse parts with samples at alternate pixels: the neighbourhoods stand in (about the
-        // centre, one part holds five samples of 1.8, mean 1, the other four, mean 0.8).
+        assert!((robust_reference_sq(&parts, 3, 3)[4].x - 4.0).abs() < 1e-9);
+        // Sparse parts with samples at alternate pixels: each part's own value is 0 at half the
+        // pixels, but the neighbourhoods stand in (about the centre, one part holds five
+        // samples of 1.8, mean 1, the other four, mean 0.8; every x is 0.9).
         let sparse = |offset: usize| -> Vec<DVec3> {
             (0..9)
                 .map(|i| DVec3::splat(if (i + offset) % 2 == 0 { 1.8 } else { 0.0 }))
                 .collect()
         };
         let r = robust_reference_sq(&[sparse(0), sparse(1)], 3, 3);
-        assert!((r[4].x - 0.64).abs() < 1e-9, "{}", r[4]);
+        assert!((r[4].x - 0.81).abs() < 1e-9, "{}", r[4]);
         // A dark column beside a bright one: the dark pixels keep their own value.
         let edge: Vec<DVec3> = (0..9)
             .map(|i| DVec3::splat(if i % 3 == 2 { 100.0 } else { 0.1 }))
