@@ -9,7 +9,7 @@ use caustica_renderer::session::{Session, SessionConfig};
 use std::sync::Arc;
 
 mod common;
-use common::MirroredLight;
+use common::{MirroredLight, log_log_slope};
 
 fn render(
     desc: SceneDescription,
@@ -236,110 +236,6 @@ fn a_million_passes_keep_the_radius_floor_and_exact_counts() {
 }
 
 /// Least-squares slope of log y against log x.
-fn log_log_slope(points: &[(f64, f64)]) -> f64 {
-    let n = points.len() as f64;
-    let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|(x, y)| (x.ln(), y.ln())).unzip();
-    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
-    let sxy: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
-    let sxx: f64 = xs.iter().map(|x| (x - mx).powi(2)).sum();
-    sxy / sxx
-}
-
-/// The convergence rate matches the theory. In the point-lit sphere the direct half of the
-/// radiance is exact (a delta light at the centre) and the indirect half, from photons only,
-/// is uniform, so the kernel adds no bias and the error is the density estimate's variance,
-/// proportional to 1 / (N_emitted R^2). With R^2 shrinking like n^(alpha - 1) (Hachisuka et
-/// al. 2008 eq. 6; Knaus & Zwicker 2011 eq. 20) and N_emitted growing like n, the mean
-/// squared error falls like n^(-alpha): slope -2/3 for alpha = 2/3, -1 for alpha = 1 (a fixed
-/// radius). We fit passes 8 to 256 and average three seeds. Measured here: -0.71 to -0.74 for
-/// alpha = 2/3 and -1.04 to -1.06 for alpha = 1, a little steeper than the asymptote because
-/// the first passes shrink the radius fastest; we allow 0.12 around the theory, well inside
-/// the gap of 1/3 between the two rates, so a wrong update rule cannot pass. The same runs
-/// measure the mean R^2, whose slope must be alpha - 1 (measured -0.32 to -0.335 for 2/3, 0 for
-/// 1): the kernel's bias is proportional to R^2 where radiance is smooth, so this is the rate
-/// at which the bias falls.
-#[test]
-fn mean_squared_error_falls_like_n_to_the_minus_alpha_and_radius_squared_like_n_to_alpha_minus_one()
-{
-    use caustica_renderer::camera::PerspectiveCamera;
-    use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
-    use caustica_renderer::integrators::{Integrator, RenderContext};
-    use std::sync::atomic::AtomicBool;
-    let scene = Arc::new(Scene::build(sphere_with_point_light(128)).unwrap());
-    let camera = PerspectiveCamera::new(&scene.camera, 24, 24);
-    let cancel = AtomicBool::new(false);
-    let checkpoints = [8u64, 16, 32, 64, 128, 256];
-    for variant in [Variant::Sppm, Variant::Pppm, Variant::Ppm] {
-        for alpha in [2.0 / 3.0, 1.0] {
-            let mut mse = vec![0.0f64; checkpoints.len()];
-            let mut radius_sq = vec![0.0f64; checkpoints.len()];
-            for seed in 0..3u64 {
-                let settings = PhotonMappingSettings {
-                    alpha,
-                    radius: 0.1,
-                    photons: 400,
-                    max_depth: 64,
-                };
-                let mut pm = PhotonMapper::new(
-                    RenderContext {
-                        scene: scene.clone(),
-                        camera,
-                        seed,
-                    },
-                    variant,
-                    settings,
-                );
-                let mut next = 0;
-                for pass in 0..*checkpoints.last().unwrap() {
-                    pm.render_pass(pass, &cancel).unwrap();
-                    if pass + 1 == checkpoints[next] {
-                        let img = pm.image();
-                        let err: f64 = img
-                            .pixels
-                            .iter()
-                            .map(|p| (p.x as f64 - 1.0).powi(2))
-                            .sum::<f64>()
-                            / img.pixels.len() as f64;
-                        mse[next] += err / 3.0;
-                        radius_sq[next] += (0..img.pixels.len())
-                            .map(|i| pm.radius(i).powi(2))
-                            .sum::<f64>()
-                            / img.pixels.len() as f64
-                            / 3.0;
-                        next += 1;
-                    }
-                }
-            }
-            let points: Vec<(f64, f64)> = checkpoints
-                .iter()
-                .map(|&n| n as f64)
-                .zip(mse.iter().copied())
-                .collect();
-            let slope = log_log_slope(&points);
-            eprintln!("{variant:?}, alpha {alpha:.3}: MSE {mse:?}, slope {slope:.3}");
-            assert!(
-                (slope + alpha).abs() < 0.12,
-                "{variant:?}, alpha {alpha}: slope {slope}, theory {}",
-                -alpha
-            );
-            // The kernel's bias is proportional to R^2 where the radiance is smooth, so it falls
-            // as the radius schedule does: R^2 like n^(alpha - 1).
-            let r_points: Vec<(f64, f64)> = checkpoints
-                .iter()
-                .map(|&n| n as f64)
-                .zip(radius_sq.iter().copied())
-                .collect();
-            let r_slope = log_log_slope(&r_points);
-            eprintln!("{variant:?}, alpha {alpha:.3}: mean R^2 slope {r_slope:.3}");
-            assert!(
-                (r_slope - (alpha - 1.0)).abs() < 0.08,
-                "{variant:?}, alpha {alpha}: R^2 slope {r_slope}, theory {}",
-                alpha - 1.0
-            );
-        }
-    }
-}
-
 /// Photons arriving behind a hit point's surface are ignored (design.md section 4): a camera
 /// looks up at the underside of a zero-thickness ceiling while a light and a roof above it
 /// send photons onto its top side, right where the underside's hit points are. Nothing lights

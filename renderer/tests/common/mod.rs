@@ -5,6 +5,16 @@
 use caustica_renderer::image::Image;
 use caustica_renderer::scene::SceneDescription;
 
+/// Least-squares slope of log y against log x.
+pub fn log_log_slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|(x, y)| (x.ln(), y.ln())).unzip();
+    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
+    let sxy: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = xs.iter().map(|x| (x - mx).powi(2)).sum();
+    sxy / sxx
+}
+
 /// A diffuse floor (y = 0) lit by a point light of intensity I at height 1 both directly and
 /// through a perfect mirror facing down at height 2: the mirror's image of the light, at
 /// height H = 3, gives the floor an irradiance E(x) = I H / (H^2 + |x|^2)^(3/2) that reaches
