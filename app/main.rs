@@ -6,6 +6,9 @@
 
 mod chart;
 mod converge;
+mod info;
+mod merge;
+mod reference;
 mod render;
 
 use caustica::viewer::{self, Automation, ViewerOptions};
@@ -53,6 +56,12 @@ enum Command {
     Render(render::RenderArgs),
     /// Measure error against time for integrators and parameter values on one scene.
     Converge(converge::ConvergeArgs),
+    /// Combine independent runs (other seeds) of one scene into one image, weighted by passes.
+    Merge(merge::MergeArgs),
+    /// Describe a scene's light transport and recommend the estimator it needs.
+    Info(info::InfoArgs),
+    /// Render a reference image with the estimator the scene needs, its error in the header.
+    Reference(reference::ReferenceArgs),
 }
 
 /// Exit code and message of a subcommand's outcome: bad arguments the way clap reports them
@@ -83,6 +92,9 @@ fn main() -> ExitCode {
     match cli.command {
         Some(Command::Render(args)) => finish("render", render::run(&args)),
         Some(Command::Converge(args)) => finish("converge", converge::run(&args)),
+        Some(Command::Merge(args)) => finish("merge", merge::run(&args)),
+        Some(Command::Info(args)) => finish("info", info::run(&args)),
+        Some(Command::Reference(args)) => finish("reference", reference::run(&args)),
         None => {
             let automation = cli.screenshot.map(|screenshot| Automation {
                 screenshot,

@@ -340,3 +340,250 @@ fn mmlt_on_the_door_writes_its_technique_histogram() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("sigma"), "{}", stderr(&o));
 }
+
+/// `--until-error` stops once the estimated relMSE falls below its value (here within a 30 s
+/// cap that a working stop never reaches), and the estimate goes to the header and --stats.
+#[test]
+fn render_until_an_estimated_error_and_record_it() {
+    let dir = temp_dir("until");
+    let (out, stats) = (dir.join("box.exr"), dir.join("box.json"));
+    let o = caustica(&[
+        "render",
+        "assets/cornell-box.gltf",
+        "-o",
+        path_str(&out),
+        "--width",
+        "32",
+        "--until-error",
+        "0.02",
+        "--time",
+        "30",
+        "--stats",
+        path_str(&stats),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("is below 2e-2"), "{}", stderr(&o));
+    let (_, meta) = read_exr(&out).unwrap();
+    let estimated: f64 = meta["estimated_relmse"].parse().unwrap();
+    assert!(estimated < 0.02, "{estimated}");
+    assert!(meta["elapsed_seconds"].parse::<f64>().unwrap() < 30.0);
+    // It stopped at the first pass below: the pass before was above (relMSE falls like 1/n,
+    // so with n passes the estimate is at least 0.02 (n - 1) / n, give or take its noise).
+    let passes: f64 = meta["passes"].parse().unwrap();
+    assert!(estimated > 0.02 * (passes - 1.0) / passes * 0.7, "{estimated} after {passes}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(json["estimated_relmse"].as_f64(), Some(estimated));
+    let o = caustica(&[
+        "render",
+        "assets/cornell-box.gltf",
+        "-o",
+        path_str(&out),
+        "--until-error",
+        "-1",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `converge` with a reference and a swept parameter: the CSV has a row per checkpoint of every
+/// run with true and estimated error, the PNG is an image, and stdout names the winners and
+/// the slopes.
+#[test]
+fn converge_measures_every_run_against_the_reference() {
+    let dir = temp_dir("converge");
+    let reference = dir.join("ref.exr");
+    let o = caustica(&[
+        "render",
+        "assets/cornell-box.gltf",
+        "-o",
+        path_str(&reference),
+        "--width",
+        "32",
+        "--spp",
+        "1024",
+        "--seed",
+        "77",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.join("measured");
+    let o = caustica(&[
+        "converge",
+        "assets/cornell-box.gltf",
+        "--reference",
+        path_str(&reference),
+        "--integrator",
+        "pt,sppm",
+        "--param",
+        "photons=2000,8000",
+        "--time",
+        "1.5",
+        "--out",
+        path_str(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    for run in ["pt", "sppm photons=2000", "sppm photons=8000"] {
+        assert!(stdout.contains(run), "{stdout}");
+    }
+    assert!(stdout.contains("lowest relMSE"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(
+        header,
+        [
+            "run",
+            "integrator",
+            "parameters",
+            "seconds",
+            "passes",
+            "rel_mse",
+            "rmse",
+            "estimated_rel_mse",
+            "estimated_bias_rel_mse"
+        ]
+    );
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    for run in ["pt", "sppm photons=2000", "sppm photons=8000"] {
+        let mine: Vec<&Vec<String>> = rows.iter().filter(|r| r[0] == run).collect();
+        assert!(mine.len() >= 3, "{run}: {csv}");
+        let errors: Vec<f64> = mine.iter().map(|r| r[5].parse().unwrap()).collect();
+        assert!(
+            errors.last().unwrap() < errors.first().unwrap(),
+            "{run}: the error falls: {errors:?}"
+        );
+        // Every frame of two passes or more estimates its error (one pass cannot).
+        assert!(
+            mine.iter()
+                .filter(|r| r[4].parse::<u64>().unwrap() >= 2)
+                .all(|r| r[7].parse::<f64>().unwrap() > 0.0),
+            "{csv}"
+        );
+    }
+    let png = image::open(out.join("convergence.png")).unwrap();
+    assert!(png.width() > 400 && png.height() > 300);
+    // A reference of another size is refused before anything renders.
+    let o = caustica(&[
+        "converge",
+        "assets/cornell-box.gltf",
+        "--reference",
+        path_str(&reference),
+        "--integrator",
+        "pt",
+        "--time",
+        "1",
+        "--width",
+        "40",
+        "--out",
+        path_str(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("ref.exr"), "{}", stderr(&o));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `info` describes the transport and recommends what the bundled scenes need; `reference`
+/// renders with it and writes its estimated error.
+#[test]
+fn info_recommends_and_reference_renders_with_the_recommendation() {
+    for (scene, expected) in [
+        ("assets/cornell-box.gltf", "pt"),
+        ("assets/caustic-pool.gltf", "sppm"),
+        ("assets/door.gltf", "bdpt"),
+    ] {
+        let o = caustica(&["info", scene, "--width", "64"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            stdout.contains(&format!("recommended: {expected}\n")),
+            "{scene}: {stdout}"
+        );
+        assert!(
+            stdout.contains(&format!("--integrator {expected}")),
+            "{stdout}"
+        );
+    }
+    let dir = temp_dir("reference");
+    let out = dir.join("pool.exr");
+    let o = caustica(&[
+        "reference",
+        "assets/caustic-pool.gltf",
+        "-o",
+        path_str(&out),
+        "--time",
+        "1",
+        "--width",
+        "32",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, meta) = read_exr(&out).unwrap();
+    assert_eq!(meta["integrator"], "sppm");
+    assert!(meta["estimated_relmse"].parse::<f64>().unwrap() > 0.0);
+    let o = caustica(&["reference", "assets/door.gltf", "-o", "x.png", "--time", "1"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Merging k independent runs gives what one run k times as long gives: against a long
+/// reference their errors agree within the statistics (both are means of the same number of
+/// independent passes; at 32 x 32 the relative spread of relMSE is about 10 %, so we allow
+/// 30 %), while averaging the runs unweighted (passes 2, 4, 6, 12) or summing them would not.
+/// The header adds up the passes and carries the merged error estimate.
+#[test]
+fn merging_runs_equals_one_longer_run() {
+    let dir = temp_dir("merge");
+    let render = |name: &str, spp: u32, seed: u32| {
+        let path = dir.join(name);
+        let o = caustica(&[
+            "render",
+            "assets/cornell-box.gltf",
+            "-o",
+            path_str(&path),
+            "--width",
+            "32",
+            "--spp",
+            &spp.to_string(),
+            "--seed",
+            &seed.to_string(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        path
+    };
+    let reference = render("ref.exr", 4096, 1000);
+    let long = render("long.exr", 24, 50);
+    let parts: Vec<PathBuf> = [(2, 1), (4, 2), (6, 3), (12, 4)]
+        .iter()
+        .map(|(spp, seed)| render(&format!("part{seed}.exr"), *spp, *seed))
+        .collect();
+    let merged_path = dir.join("merged.exr");
+    let mut args = vec!["merge"];
+    args.extend(parts.iter().map(|p| path_str(p)));
+    args.extend(["-o", path_str(&merged_path)]);
+    let o = caustica(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (reference, _) = read_exr(&reference).unwrap();
+    let (long, long_meta) = read_exr(&long).unwrap();
+    let (merged, meta) = read_exr(&merged_path).unwrap();
+    assert_eq!(meta["passes"], "24");
+    assert_eq!(meta["seed"], "1,2,3,4");
+    let error = |img| caustica_renderer::image::compare(img, &reference).unwrap().rel_mse;
+    let (e_long, e_merged) = (error(&long), error(&merged));
+    eprintln!("relMSE: one run of 24 passes {e_long:.4e}, four merged {e_merged:.4e}");
+    assert!((e_merged / e_long - 1.0).abs() < 0.3, "{e_merged} vs {e_long}");
+    let estimated: f64 = meta["estimated_relmse"].parse().unwrap();
+    let long_estimated: f64 = long_meta["estimated_relmse"].parse().unwrap();
+    assert!((estimated / long_estimated - 1.0).abs() < 0.3, "{estimated} vs {long_estimated}");
+    // Two runs with one seed are the same samples: refused.
+    let o = caustica(&[
+        "merge",
+        path_str(&parts[0]),
+        path_str(&parts[0]),
+        "-o",
+        path_str(&merged_path),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    std::fs::remove_dir_all(dir).unwrap();
+}

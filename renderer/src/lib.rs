@@ -32,3 +32,4 @@ pub mod procedural;
 pub mod sampling;
 pub mod scene;
 pub mod session;
+pub mod transport;

@@ -113,7 +113,7 @@ impl PhotonMappingSettings {
         },
         ParamSpec {
             name: "radius",
-            doc: "Initial gather radius in scene units; 0 picks four pixel footprints at the scene's distance.",
+            doc: "Initial gather radius in scene units; 0 picks four pixel footprints at the median distance of the surfaces the camera sees.",
             default: 0.0,
             min: 0.0,
             max: 1e6,
@@ -151,15 +151,24 @@ impl PhotonMappingSettings {
     }
 }
 
-/// The automatic initial radius: four pixel footprints at the distance from the camera to the
-/// centre of the scene's bounds (a pixel there is 2 d tan(fov / 2) / height wide).
+/// The automatic initial radius: four pixel footprints at the median distance at which the
+/// camera's rays, followed through specular surfaces, meet the surfaces that hold hit points
+/// (`transport::pixel_footprint_radius`, from 1024 camera paths). Measured where hit points
+/// are rather than at the scene's centre, it stays right for a camera inside a room, or one
+/// seeing most of the scene through glass. A view that meets no surface falls back to the
+/// distance to the centre of the scene's bounds.
 pub fn auto_radius(ctx: &RenderContext) -> f64 {
-    let d = (ctx.scene.bounds.center() - ctx.camera.position())
-        .length()
-        .max(1e-6) as f64;
-    let pixel =
-        2.0 * d * (ctx.scene.camera.yfov as f64 / 2.0).tan() / ctx.camera.height.max(1) as f64;
-    4.0 * pixel
+    let view = crate::transport::survey_view(&ctx.scene, &ctx.camera, 1024, ctx.seed);
+    let distance = if view.median_hit_distance > 0.0 {
+        view.median_hit_distance
+    } else {
+        (ctx.scene.bounds.center() - ctx.camera.position()).length() as f64
+    };
+    crate::transport::pixel_footprint_radius(
+        distance,
+        ctx.camera.height,
+        ctx.scene.camera.yfov,
+    )
 }
 
 #[derive(Clone, Copy, Debug, Default)]

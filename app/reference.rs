@@ -1,0 +1,79 @@
+//! `caustica reference`: a converged image to measure against, rendered with the estimator the
+//! scene needs (`caustica info` says which and why), its remaining error estimated and written
+//! into the header (`caustica:estimated_relmse`), so a user knows how far it can be trusted.
+
+use anyhow::anyhow;
+use caustica_renderer::scene::gltf;
+use caustica_renderer::transport;
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct ReferenceArgs {
+    /// Scene to render (.gltf or .glb).
+    pub scene: PathBuf,
+    /// Output EXR.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Seconds to render.
+    #[arg(long, value_parser = crate::render::parse_seconds)]
+    pub time: f64,
+    /// Image width [default: 512, or from --height and the camera's aspect ratio].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub width: Option<u32>,
+    /// Image height [default: from the width and the camera's aspect ratio, else square].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub height: Option<u32>,
+    /// Seed (a reference for runs of seed 0 is best rendered with another).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub seed: u64,
+    /// Worker threads (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Write the run's statistics as JSON.
+    #[arg(long, value_name = "FILE.json")]
+    pub stats: Option<PathBuf>,
+}
+
+pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
+    use crate::render::{Failure, RenderArgs};
+    if !args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+    {
+        return Err(Failure::Usage(format!(
+            "--output {}: a reference is linear: the file name must end in .exr",
+            args.output.display()
+        )));
+    }
+    let scene = gltf::load(&args.scene).map_err(|e| anyhow!(e))?;
+    let (width, height) =
+        crate::render::output_size(args.width, args.height, scene.camera.aspect);
+    let (_, r) = transport::analyse(&scene, width, height);
+    eprintln!("reference with {}: {}", r.integrator, r.reasons.join("; "));
+    let param = |name: &str| r.params.get(name).copied();
+    let render = RenderArgs {
+        scene: args.scene.clone(),
+        output: args.output.clone(),
+        integrator: r.integrator.to_string(),
+        spp: None,
+        time: Some(args.time),
+        until_error: None,
+        width: Some(width),
+        height: Some(height),
+        seed: args.seed,
+        threads: args.threads,
+        max_depth: None,
+        alpha: None,
+        radius: param("radius"),
+        photons: param("photons").map(|p| p as u64),
+        large_step: None,
+        sigma: None,
+        bootstrap: None,
+        chains: None,
+        stats: args.stats.clone(),
+        exposure: 0.0,
+    };
+    crate::render::run(&render)
+}

@@ -1,0 +1,379 @@
+//! What light transport a scene has, and which estimator it therefore needs ("model only what
+//! a scene requires"). A survey traces a few thousand camera paths and light paths, which
+//! takes milliseconds, and measures what decides between the estimators:
+//!
+//! - how much of the view is seen through specular surfaces (paths E S+ D: glass, mirrors),
+//! - how much of the light reaching diffuse or glossy surfaces has passed specular ones first
+//!   (L S+ D: caustics), and how much of that comes from delta lights (point, spot,
+//!   directional),
+//! - how much of what the camera sees has a light in direct view (the rest is lit through
+//!   openings or by interreflection only), and how much of it is glossy.
+//!
+//! From that follow hard limits and a recommendation. A caustic from a delta light seen
+//! through a specular surface (L S+ D S+ E, a point light's caustic seen through water) has no
+//! edge between two non-specular vertices: no unbiased technique (pt, bdpt, mmlt) can sample
+//! it, and only the photon mappers render it. A caustic from a delta light seen directly
+//! (L S+ D E) is out of the path tracer's reach (its next-event estimate cannot cross the
+//! specular surface, its BSDF samples cannot hit the light) but bidirectional methods reach
+//! it by light tracing. Where caustics carry much of the light, photon mapping wins however
+//! the light is shaped; where the camera sees little direct light, bidirectional methods do;
+//! otherwise the path tracer, simplest and unbiased, is hard to beat.
+
+use crate::camera::PerspectiveCamera;
+use crate::integrators::ParamValues;
+use crate::integrators::path::sample_direct;
+use crate::integrators::scatter;
+use crate::light::emission::sample_le;
+use crate::material::{Bsdf, TransportMode};
+use crate::sampling::sampler::Sampler;
+use crate::scene::Scene;
+use glam::Vec2;
+
+/// Bounces followed through specular surfaces before a path is given up.
+const MAX_SPECULAR_DEPTH: u32 = 16;
+/// Microfacet roughness (alpha) below which a surface counts as glossy.
+const GLOSSY_ALPHA: f32 = 0.2;
+
+/// What a survey of camera and light paths found.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TransportSurvey {
+    pub camera_paths: usize,
+    pub light_paths: usize,
+    /// Of the camera paths that reach a non-specular surface, the share that got there
+    /// through at least one specular bounce (E S+ D).
+    pub seen_through_specular: f64,
+    /// Of the same, the share whose surface is glossy (a microfacet lobe with alpha < 0.2).
+    pub glossy: f64,
+    /// Of the same, the share with a light in direct view (a next-event sample unoccluded).
+    pub directly_lit: f64,
+    /// The share of the camera paths that reach no surface (background, escaped).
+    pub background: f64,
+    /// Of the lights' power, the share in delta lights (point, spot, directional).
+    pub delta_light_power: f64,
+    /// Of the flux photons bring to their first non-specular surface, the share that passed
+    /// at least one specular surface first (L S+ D).
+    pub caustic_flux: f64,
+    /// The part of `caustic_flux` that comes from delta lights.
+    pub delta_caustic_flux: f64,
+    /// Median length of the camera paths to their first non-specular vertex (scene units).
+    pub median_hit_distance: f64,
+}
+
+/// An integrator a scene needs, with its parameters and the reasons.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recommendation {
+    pub integrator: &'static str,
+    /// Parameters beyond the defaults, chosen for this scene and resolution.
+    pub params: ParamValues,
+    pub reasons: Vec<String>,
+    /// Integrators that cannot converge to the right image here, and why.
+    pub cannot_converge: Vec<(&'static str, String)>,
+}
+
+fn is_glossy(bsdf: &Bsdf) -> bool {
+    match bsdf {
+        Bsdf::MetallicRoughness(m) => m.distrib.alpha < GLOSSY_ALPHA,
+        _ => false,
+    }
+}
+
+/// Traces `camera_paths` camera paths (stratified over the image) and `light_paths` light
+/// paths; deterministic for a given seed.
+pub fn survey(
+    scene: &Scene,
+    camera: &PerspectiveCamera,
+    camera_paths: usize,
+    light_paths: usize,
+    seed: u64,
+) -> TransportSurvey {
+    let mut s = TransportSurvey {
+        camera_paths,
+        light_paths,
+        ..Default::default()
+    };
+    let view = survey_view(scene, camera, camera_paths, seed);
+    s.seen_through_specular = view.seen_through_specular;
+    s.glossy = view.glossy;
+    s.directly_lit = view.directly_lit;
+    s.background = view.background;
+    s.median_hit_distance = view.median_hit_distance;
+    let mut sampler = Sampler::new(seed ^ 0x5a7e_e7a1_0000_0002);
+
+    // Light paths, lights chosen by power as the photon mappers choose them.
+    let total_power: f64 = (0..scene.lights.len())
+        .map(|i| scene.light_sampler.pmf(i) as f64)
+        .sum();
+    s.delta_light_power = if total_power > 0.0 {
+        (0..scene.lights.len())
+            .filter(|&i| scene.lights[i].is_delta())
+            .map(|i| scene.light_sampler.pmf(i) as f64)
+            .sum::<f64>()
+            / total_power
+    } else {
+        0.0
+    };
+    let (mut flux_all, mut flux_caustic, mut flux_delta_caustic) = (0.0f64, 0.0f64, 0.0f64);
+    for i in 0..light_paths {
+        sampler.start_pixel_sample(i as u64, 1);
+        let Some((light, pmf)) = scene.light_sampler.sample(sampler.get_1d()) else {
+            break;
+        };
+        let (u_pos, u_dir, u_side) = (sampler.get_2d(), sampler.get_2d(), sampler.get_1d());
+        let Some(emitted) = sample_le(scene, &scene.lights[light], u_pos, u_dir, u_side) else {
+            continue;
+        };
+        let mut flux = emitted.flux() / pmf;
+        let mut ray = emitted.ray;
+        for depth in 0..=MAX_SPECULAR_DEPTH {
+            let Some(si) = scene.intersect(&ray) else {
+                break;
+            };
+            let bsdf = scene.bsdf(&si);
+            if !bsdf.is_delta() {
+                let power = crate::geometry::luminance(flux) as f64;
+                if power.is_finite() {
+                    flux_all += power;
+                    if depth > 0 {
+                        flux_caustic += power;
+                        if scene.lights[light].is_delta() {
+                            flux_delta_caustic += power;
+                        }
+                    }
+                }
+                break;
+            }
+            let wo = si.shading.to_local(si.wo);
+            let Some(next) = scatter(&si, &bsdf, wo, &mut sampler, TransportMode::Importance)
+            else {
+                break;
+            };
+            flux *= next.weight;
+            ray = next.ray;
+        }
+    }
+    if flux_all > 0.0 {
+        s.caustic_flux = flux_caustic / flux_all;
+        s.delta_caustic_flux = flux_delta_caustic / flux_all;
+    }
+    s
+}
+
+/// The camera half of the survey: `paths` camera paths on a jittered grid over the image,
+/// followed through specular bounces to their first non-specular vertex (or given up after
+/// `MAX_SPECULAR_DEPTH`); fills the view's shares and the median hit distance.
+pub fn survey_view(
+    scene: &Scene,
+    camera: &PerspectiveCamera,
+    paths: usize,
+    seed: u64,
+) -> TransportSurvey {
+    let mut s = TransportSurvey {
+        camera_paths: paths,
+        ..Default::default()
+    };
+    let camera_paths = paths;
+    let mut sampler = Sampler::new(seed ^ 0x5a7e_e7a1_0000_0001);
+    let mut rays = 0u64;
+    // Camera paths on a jittered grid over the image.
+    let side = (camera_paths as f64).sqrt().ceil().max(1.0) as usize;
+    let (mut surfaces, mut through, mut glossy, mut lit) = (0usize, 0usize, 0usize, 0usize);
+    let mut distances = Vec::new();
+    for i in 0..camera_paths {
+        sampler.start_pixel_sample(i as u64, 0);
+        let cell = Vec2::new((i % side) as f32, (i / side % side) as f32);
+        let film = (cell + sampler.get_2d()) / side as f32
+            * Vec2::new(camera.width as f32, camera.height as f32);
+        let mut ray = camera.generate_ray(film);
+        let mut length = 0.0f32;
+        for depth in 0..=MAX_SPECULAR_DEPTH {
+            let Some(si) = scene.intersect(&ray) else {
+                break;
+            };
+            length += si.t * ray.d.length();
+            let bsdf = scene.bsdf(&si);
+            let wo = si.shading.to_local(si.wo);
+            if !bsdf.is_delta() {
+                surfaces += 1;
+                through += usize::from(depth > 0);
+                glossy += usize::from(is_glossy(&bsdf));
+                distances.push(length as f64);
+                let seen = (0..4).any(|_| {
+                    sample_direct(scene, &si, &bsdf, wo, &mut sampler, &mut rays, false)
+                        .max_element()
+                        > 0.0
+                });
+                lit += usize::from(seen);
+                break;
+            }
+            let Some(next) = scatter(&si, &bsdf, wo, &mut sampler, TransportMode::Radiance)
+            else {
+                break;
+            };
+            ray = next.ray;
+        }
+    }
+    let share = |n: usize, of: usize| if of > 0 { n as f64 / of as f64 } else { 0.0 };
+    s.seen_through_specular = share(through, surfaces);
+    s.glossy = share(glossy, surfaces);
+    s.directly_lit = share(lit, surfaces);
+    s.background = share(camera_paths - surfaces, camera_paths);
+    distances.sort_by(f64::total_cmp);
+    s.median_hit_distance = distances.get(distances.len() / 2).copied().unwrap_or(0.0);
+
+    s
+}
+
+/// The survey at an output size (4096 camera paths, 8192 light paths) and what follows from it.
+pub fn analyse(scene: &Scene, width: u32, height: u32) -> (TransportSurvey, Recommendation) {
+    let camera = PerspectiveCamera::new(&scene.camera, width, height);
+    let s = survey(scene, &camera, 4096, 8192, 1);
+    let r = s.recommend(width, height, scene.camera.yfov);
+    (s, r)
+}
+
+/// The share above which a kind of transport counts as present.
+const PRESENT: f64 = 0.01;
+/// The share above which it decides the choice of estimator.
+const DOMINANT: f64 = 0.05;
+
+impl TransportSurvey {
+    /// The integrator this scene needs at `width` x `height`, its parameters and the reasons.
+    pub fn recommend(&self, width: u32, height: u32, yfov: f32) -> Recommendation {
+        let mut reasons = Vec::new();
+        let mut cannot = Vec::new();
+        let pct = |x: f64| format!("{:.0} %", 100.0 * x);
+        if self.delta_caustic_flux > PRESENT && self.seen_through_specular > PRESENT {
+            let why = format!(
+                "a caustic lit by a point, spot or directional light ({} of the light reaching surfaces) is seen through specular surfaces ({} of the view): no unbiased technique can sample such paths",
+                pct(self.delta_caustic_flux),
+                pct(self.seen_through_specular)
+            );
+            for name in ["pt", "bdpt", "mmlt"] {
+                cannot.push((name, why.clone()));
+            }
+        } else if self.delta_caustic_flux > PRESENT {
+            cannot.push((
+                "pt",
+                format!(
+                    "caustics lit by a point, spot or directional light ({} of the light reaching surfaces): the path tracer cannot reach them (bdpt and mmlt do, by light tracing)",
+                    pct(self.delta_caustic_flux)
+                ),
+            ));
+        }
+        let caustics_matter = self.caustic_flux > DOMINANT
+            || (self.delta_caustic_flux > PRESENT && self.seen_through_specular > PRESENT);
+        let integrator = if caustics_matter {
+            reasons.push(format!(
+                "{} of the light reaching diffuse or glossy surfaces has passed specular ones (caustics){}: photon density estimation gathers it where paths from the camera rarely find it",
+                pct(self.caustic_flux),
+                if self.seen_through_specular > PRESENT {
+                    format!(", and {} of the view is seen through specular surfaces", pct(self.seen_through_specular))
+                } else {
+                    String::new()
+                }
+            ));
+            "sppm"
+        } else if self.directly_lit < 0.5 {
+            reasons.push(format!(
+                "only {} of what the camera sees has a light in direct view: the light arrives through openings or by interreflection, which paths from the lights find (bidirectional methods)",
+                pct(self.directly_lit)
+            ));
+            "bdpt"
+        } else {
+            reasons.push(format!(
+                "{} of the view is lit directly and there are no strong caustics ({}): the path tracer, with next-event estimation, is the simplest unbiased choice",
+                pct(self.directly_lit),
+                pct(self.caustic_flux)
+            ));
+            "pt"
+        };
+        if self.glossy > DOMINANT && integrator == "sppm" {
+            reasons.push(format!(
+                "{} of the view is glossy, which photon mapping blurs until its radius is small",
+                pct(self.glossy)
+            ));
+        }
+        let mut params = ParamValues::new();
+        if integrator == "sppm" {
+            params.insert(
+                "radius".into(),
+                pixel_footprint_radius(self.median_hit_distance, height, yfov),
+            );
+            params.insert("photons".into(), photons_per_pass(width, height) as f64);
+        }
+        Recommendation {
+            integrator,
+            params,
+            reasons,
+            cannot_converge: cannot,
+        }
+    }
+}
+
+/// The initial gather radius: four pixel footprints at the median distance the camera sees
+/// surfaces at (a pixel there is 2 d tan(fov / 2) / height wide), through specular chains.
+pub fn pixel_footprint_radius(distance: f64, height: u32, yfov: f32) -> f64 {
+    let pixel = 2.0 * distance.max(1e-6) * (yfov as f64 / 2.0).tan() / height.max(1) as f64;
+    4.0 * pixel
+}
+
+/// Photons per pass: one per pixel, so that the photon pass and the eye pass cost about the
+/// same (each is one path per item), within 10^4 and 10^6.
+pub fn photons_per_pass(width: u32, height: u32) -> u64 {
+    (width as u64 * height as u64).clamp(10_000, 1_000_000)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::procedural::{caustic_pool, cornell_box, door};
+    use glam::Vec3;
+
+    fn survey_of(desc: crate::scene::SceneDescription) -> TransportSurvey {
+        let scene = Scene::build(desc).unwrap();
+        let camera = PerspectiveCamera::new(&scene.camera, 64, 64);
+        survey(&scene, &camera, 4096, 8192, 1)
+    }
+
+    #[test]
+    fn the_bundled_scenes_get_the_estimators_their_transport_needs() {
+        let glass = survey_of(cornell_box(true));
+        assert!(glass.caustic_flux > 0.0 && glass.seen_through_specular > 0.01, "{glass:?}");
+        let plain = survey_of(cornell_box(false));
+        assert_eq!(plain.caustic_flux, 0.0, "{plain:?}");
+        assert_eq!(plain.seen_through_specular, 0.0);
+        assert!(plain.directly_lit > 0.5, "{plain:?}");
+        assert_eq!(plain.recommend(64, 64, 0.7).integrator, "pt");
+        let pool = survey_of(caustic_pool());
+        assert!(pool.caustic_flux > 0.3, "{pool:?}");
+        assert_eq!(pool.recommend(64, 64, 0.7).integrator, "sppm");
+        let door = survey_of(door());
+        assert!(door.directly_lit < 0.2, "{door:?}");
+        assert_eq!(door.recommend(64, 64, 0.7).integrator, "bdpt");
+    }
+
+    #[test]
+    fn a_point_lights_caustic_seen_through_glass_rules_out_the_unbiased_estimators() {
+        // The caustic pool with its area light replaced by a point light at its centre.
+        let mut desc = caustic_pool();
+        let light = desc
+            .meshes
+            .iter()
+            .position(|m| desc.materials[m.material as usize].emission.max_element() > 0.0)
+            .expect("the pool has an emitter");
+        let centre = desc.meshes[light].positions.iter().sum::<Vec3>()
+            / desc.meshes[light].positions.len() as f32;
+        desc.meshes.remove(light);
+        desc.lights.push(crate::scene::PunctualLightDesc::Point {
+            position: centre,
+            intensity: Vec3::splat(10.0),
+        });
+        let s = survey_of(desc);
+        assert!(s.delta_light_power > 0.99 && s.delta_caustic_flux > 0.3, "{s:?}");
+        let r = s.recommend(64, 64, 0.7);
+        assert_eq!(r.integrator, "sppm");
+        let ruled_out: Vec<&str> = r.cannot_converge.iter().map(|c| c.0).collect();
+        assert_eq!(ruled_out, ["pt", "bdpt", "mmlt"]);
+        assert!(r.params["radius"] > 0.0 && r.params["photons"] >= 10_000.0);
+    }
+}
