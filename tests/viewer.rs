@@ -574,3 +574,32 @@ fn mmlt_in_the_viewer_with_live_large_step_histogram_and_warning() {
         "the histogram restarted with the session"
     );
 }
+
+/// The side panel says which estimator the scene's light transport needs, and one click
+/// switches to it with the parameters chosen for the scene.
+#[test]
+fn the_panel_recommends_the_estimator_the_scene_needs() {
+    let mut h = harness(Some(asset("caustic-pool.gltf")));
+    step_until(&mut h, "the first frames", rendering);
+    assert_eq!(h.state().settings.integrator, "pt");
+    h.get_by_label("recommended: sppm");
+    h.get_by_label("Use sppm").click();
+    h.run_steps(2);
+    let state = h.state();
+    assert_eq!(state.settings.integrator, "sppm");
+    let recommended = state
+        .controller
+        .scene
+        .as_ref()
+        .unwrap()
+        .recommendation
+        .params
+        .clone();
+    let session = state.controller.session().unwrap();
+    assert_eq!(session.integrator().name, "sppm");
+    assert_eq!(session.params()["radius"], recommended["radius"]);
+    assert_eq!(session.params()["photons"], recommended["photons"]);
+    // Once it is in use there is nothing to switch to.
+    h.run_steps(2);
+    assert_eq!(h.query_all_by_label("Use sppm").count(), 0);
+}

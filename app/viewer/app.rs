@@ -25,6 +25,8 @@ pub enum Command {
     OpenScene(PathBuf),
     ShowOpenDialog,
     SetIntegrator(String),
+    /// Switch to the integrator and parameters the scene's survey recommends.
+    UseRecommended,
     SetParam(String, f64),
     SetResolution(u32, u32),
     SetThreads(usize),
@@ -181,7 +183,21 @@ impl ViewerApp {
     /// Carries out a command.
     pub fn apply(&mut self, command: Command) {
         match command {
-            Command::OpenScene(path) => self.controller.open_scene(path),
+            Command::OpenScene(path) => {
+                self.controller
+                    .open_scene(path, self.settings.width, self.settings.height)
+            }
+            Command::UseRecommended => {
+                let Some(r) = self.controller.scene.as_ref().map(|s| s.recommendation.clone())
+                else {
+                    return;
+                };
+                let mut params = ViewerSettings::defaults_of(r.integrator);
+                params.extend(r.params.clone());
+                self.settings.integrator = r.integrator.to_string();
+                self.settings.params = params;
+                self.restart();
+            }
             Command::ShowOpenDialog => self.show_dialog(DialogPurpose::Scene),
             Command::ShowReferenceDialog => self.show_dialog(DialogPurpose::Reference),
             Command::LoadReference(path) => self.convergence.load_reference(path),
@@ -512,6 +528,7 @@ impl eframe::App for ViewerApp {
                         .scene
                         .as_ref()
                         .map(|s| (s.path.as_path(), &s.scene.info)),
+                    recommendation: self.controller.scene.as_ref().map(|s| &s.recommendation),
                     loading: self.controller.loading(),
                     frame: current.as_deref(),
                     resident_bytes: if self.show_process_stats {

@@ -8,6 +8,7 @@ use crate::viewer::settings::ViewerSettings;
 use caustica_renderer::integrators;
 use caustica_renderer::scene::{Scene, SceneError, gltf};
 use caustica_renderer::session::{Frame, FrameCallback, Session, SessionConfig};
+use caustica_renderer::transport::{self, Recommendation, TransportSurvey};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
@@ -15,7 +16,13 @@ use std::sync::mpsc::{Receiver, TryRecvError, channel};
 pub struct LoadedScene {
     pub path: PathBuf,
     pub scene: Arc<Scene>,
+    /// Its light transport and the estimator it needs (surveyed on the loading thread).
+    pub transport: TransportSurvey,
+    pub recommendation: Recommendation,
 }
+
+/// A scene loaded and surveyed on the loading thread.
+type Loaded = (Scene, TransportSurvey, Recommendation);
 
 /// What happened in the background since the last poll.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,7 +42,7 @@ pub enum ParamEffect {
 pub struct RenderController {
     pub scene: Option<LoadedScene>,
     session: Option<Session>,
-    loading: Option<(PathBuf, Receiver<Result<Scene, SceneError>>)>,
+    loading: Option<(PathBuf, Receiver<Result<Loaded, SceneError>>)>,
     on_frame: FrameCallback,
     /// Sessions started so far, so tests and the status line can tell a restart happened.
     pub sessions_started: u64,
@@ -57,13 +64,18 @@ impl RenderController {
         }
     }
 
-    /// Starts loading a scene; the current one keeps rendering until the new one is ready.
-    pub fn open_scene(&mut self, path: PathBuf) {
+    /// Starts loading a scene, and surveying its light transport for a `width` x `height`
+    /// image; the current one keeps rendering until the new one is ready.
+    pub fn open_scene(&mut self, path: PathBuf, width: u32, height: u32) {
         let (tx, rx) = channel();
         let notify = self.on_frame.clone();
         let load_path = path.clone();
         std::thread::spawn(move || {
-            let _ = tx.send(gltf::load(&load_path));
+            let loaded = gltf::load(&load_path).map(|scene| {
+                let (survey, recommendation) = transport::analyse(&scene, width, height);
+                (scene, survey, recommendation)
+            });
+            let _ = tx.send(loaded);
             notify();
         });
         self.loading = Some((path, rx));
@@ -92,12 +104,14 @@ impl RenderController {
                 events.push(ControllerEvent::SceneFailed(e.to_string()));
                 self.loading = None;
             }
-            Ok(Ok(scene)) => {
+            Ok(Ok((scene, survey, recommendation))) => {
                 let path = path.clone();
                 self.loading = None;
                 self.scene = Some(LoadedScene {
                     path: path.clone(),
                     scene: Arc::new(scene),
+                    transport: survey,
+                    recommendation,
                 });
                 match self.restart(settings) {
                     Ok(()) => events.push(ControllerEvent::SceneLoaded(path)),

@@ -7,12 +7,15 @@ use caustica_renderer::image::ToneCurve;
 use caustica_renderer::integrators::{self, ParamSpec};
 use caustica_renderer::scene::SceneInfo;
 use caustica_renderer::session::{Frame, RunState};
+use caustica_renderer::transport::Recommendation;
 use eframe::egui::{self, RichText};
 use std::path::Path;
 
 /// What the panel displays besides the settings.
 pub struct PanelStatus<'a> {
     pub scene: Option<(&'a Path, &'a SceneInfo)>,
+    /// The estimator the scene needs, and those that cannot converge on it.
+    pub recommendation: Option<&'a Recommendation>,
     pub loading: Option<&'a Path>,
     pub frame: Option<&'a Frame>,
     pub resident_bytes: Option<u64>,
@@ -94,6 +97,9 @@ pub fn side_panel(
             for w in &info.warnings {
                 ui.label(RichText::new(format!("warning: {w}")).small());
             }
+        }
+        if let Some(r) = status.recommendation {
+            recommendation(ui, settings, r, &mut out);
         }
         ui.horizontal(|ui| {
             if ui.button("Open…").on_hover_text("Ctrl+O").clicked() {
@@ -250,6 +256,35 @@ pub fn side_panel(
         statistics(ui, status);
     });
     out
+}
+
+/// What the scene's light transport needs: the recommended estimator (with its reasons on
+/// hover and a button to switch to it) and the estimators that cannot converge here.
+fn recommendation(
+    ui: &mut egui::Ui,
+    settings: &ViewerSettings,
+    r: &Recommendation,
+    out: &mut Vec<Command>,
+) {
+    ui.horizontal(|ui| {
+        ui.label(format!("recommended: {}", r.integrator))
+            .on_hover_text(r.reasons.join("\n"));
+        if settings.integrator != r.integrator
+            && ui
+                .button(format!("Use {}", r.integrator))
+                .on_hover_text("switch to it, with the radius and photons chosen for this scene")
+                .clicked()
+        {
+            out.push(Command::UseRecommended);
+        }
+    });
+    for (name, why) in &r.cannot_converge {
+        ui.colored_label(
+            ui.visuals().warn_fg_color,
+            format!("{name} cannot converge here"),
+        )
+        .on_hover_text(why);
+    }
 }
 
 fn statistics(ui: &mut egui::Ui, status: &PanelStatus) {
