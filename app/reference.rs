@@ -1,5 +1,7 @@
-//! `caustica reference`: a converged image to measure against, rendered with the estimator the
-//! scene needs (`caustica info` says which and why), its remaining error estimated and written
+//! `caustica reference`: a converged image to measure against, rendered with the most robust
+//! estimator for the scene (`TransportSurvey::reference`: the one `caustica info` recommends,
+//! but unbiased wherever an unbiased one converges, so that photon mappers measured against
+//! the reference do not find their own bias in it), its remaining error estimated and written
 //! into the header (`caustica:estimated_relmse`), so a user knows how far it can be trusted.
 
 use anyhow::anyhow;
@@ -50,7 +52,8 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
     let scene = gltf::load(&args.scene).map_err(|e| anyhow!(e))?;
     let (width, height) =
         crate::render::output_size(args.width, args.height, scene.camera.aspect);
-    let (_, r) = transport::analyse(&scene, width, height);
+    let survey = transport::survey_at(&scene, width, height);
+    let r = survey.reference(width, height, scene.camera.yfov);
     eprintln!("reference with {}: {}", r.integrator, r.reasons.join("; "));
     let param = |name: &str| r.params.get(name).copied();
     let render = RenderArgs {

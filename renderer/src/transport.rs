@@ -225,10 +225,15 @@ pub fn survey_view(
 
 /// The survey at an output size (4096 camera paths, 8192 light paths) and what follows from it.
 pub fn analyse(scene: &Scene, width: u32, height: u32) -> (TransportSurvey, Recommendation) {
-    let camera = PerspectiveCamera::new(&scene.camera, width, height);
-    let s = survey(scene, &camera, 4096, 8192, 1);
+    let s = survey_at(scene, width, height);
     let r = s.recommend(width, height, scene.camera.yfov);
     (s, r)
+}
+
+/// The standard survey (4096 camera paths, 8192 light paths) for a `width` x `height` image.
+pub fn survey_at(scene: &Scene, width: u32, height: u32) -> TransportSurvey {
+    let camera = PerspectiveCamera::new(&scene.camera, width, height);
+    survey(scene, &camera, 4096, 8192, 1)
 }
 
 /// The share above which a kind of transport counts as present.
@@ -310,6 +315,27 @@ impl TransportSurvey {
     }
 }
 
+impl TransportSurvey {
+    /// The integrator for a reference image, which others will be measured against: an
+    /// unbiased one wherever one converges, so that a photon mapper compared with the
+    /// reference does not find its own kernel bias in it, unless caustics carry so much of the
+    /// light (over 20 %) that an unbiased estimator's noise after a long run would still
+    /// exceed the photon mapper's bias.
+    pub fn reference(&self, width: u32, height: u32, yfov: f32) -> Recommendation {
+        let mut r = self.recommend(width, height, yfov);
+        let unbiased_possible = r.cannot_converge.iter().all(|(name, _)| *name == "pt");
+        if r.integrator == "sppm" && unbiased_possible && self.caustic_flux <= 0.2 {
+            r.integrator = "bdpt";
+            r.params.clear();
+            r.reasons.push(
+                "for a reference, bdpt: unbiased, and it reaches these caustics by light tracing"
+                    .into(),
+            );
+        }
+        r
+    }
+}
+
 /// The initial gather radius: four pixel footprints at the median distance the camera sees
 /// surfaces at (a pixel there is 2 d tan(fov / 2) / height wide), through specular chains.
 pub fn pixel_footprint_radius(distance: f64, height: u32, yfov: f32) -> f64 {
@@ -347,6 +373,9 @@ mod tests {
         let pool = survey_of(caustic_pool());
         assert!(pool.caustic_flux > 0.3, "{pool:?}");
         assert_eq!(pool.recommend(64, 64, 0.7).integrator, "sppm");
+        assert_eq!(pool.reference(64, 64, 0.7).integrator, "sppm");
+        assert_eq!(glass.recommend(64, 64, 0.7).integrator, "sppm");
+        assert_eq!(glass.reference(64, 64, 0.7).integrator, "bdpt");
         let door = survey_of(door());
         assert!(door.directly_lit < 0.2, "{door:?}");
         assert_eq!(door.recommend(64, 64, 0.7).integrator, "bdpt");
