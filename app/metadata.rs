@@ -1,4 +1,4 @@
-//! What Caustica writes beside every image it saves: the EXR header attributes (design.md
+//! What Caustica writes beside every image it saves: the EXR header attributes (DESIGN.md
 //! section 3), built in this one place for the command line and the viewer.
 
 use caustica_renderer::integrators::{ParamValues, params_json};

@@ -1,5 +1,5 @@
 //! Error against a reference as the render converges, measured on a background thread with
-//! the one metric implementation of the renderer (design.md section 3). The UI sends each new
+//! the one metric implementation of the renderer (DESIGN.md section 3). The UI sends each new
 //! frame; the thread drops all but the newest, so it never falls behind and the UI never waits.
 //! Beside it, with or without a reference, the error each frame estimates of itself
 //! (`Frame::error`), recorded on the UI thread since it costs nothing to read.

@@ -157,7 +157,7 @@ fn bench_load(c: &mut Criterion) {
 }
 
 /// Latency of `Session::cancel` while all cores render 512 x 512 passes of cornell-glass:
-/// from the call until the session has stopped (design.md section 6 asks for 50 ms at most).
+/// from the call until the session has stopped (DESIGN.md section 6 asks for 50 ms at most).
 fn bench_cancel(c: &mut Criterion) {
     use caustica_renderer::session::{Session, SessionConfig};
     let scene = scene();

@@ -22,7 +22,7 @@ pub struct CameraDesc {
 }
 
 impl CameraDesc {
-    /// The default camera for a scene without one (design.md section 2): looking down -Z at
+    /// The default camera for a scene without one (DESIGN.md section 2): looking down -Z at
     /// the centre of the bounds from far enough that the bounding sphere fits a 45 degree view.
     pub fn framing(bounds: &Bounds3) -> CameraDesc {
         let (center, radius) = bounds.bounding_sphere();

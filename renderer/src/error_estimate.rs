@@ -1,6 +1,6 @@
 //! The remaining error of a progressive estimate, without a reference.
 //!
-//! The error a user cares about is relMSE against the converged image r (design.md section 3):
+//! The error a user cares about is relMSE against the converged image r (DESIGN.md section 3):
 //! the mean over pixels and channels of (x - r)^2 / (r^2 + 0.01). Without r, each integrator
 //! estimates every pixel's expected squared error from its own samples,
 //!
@@ -43,7 +43,7 @@ pub struct PixelError {
     pub reference_sq: DVec3,
 }
 
-/// The relMSE denominator's stabiliser (design.md section 3).
+/// The relMSE denominator's stabiliser (DESIGN.md section 3).
 pub const REL_MSE_EPSILON: f64 = 0.01;
 
 impl ErrorEstimate {

@@ -1,4 +1,4 @@
-//! The film: per-pixel sums of radiance estimates in f64 (design.md section 1: accumulators
+//! The film: per-pixel sums of radiance estimates in f64 (DESIGN.md section 1: accumulators
 //! that grow without bound are f64/u64), one sample per pixel per pass, box filter.
 //! A pass is computed into its own buffer and merged only when complete, so a cancelled pass
 //! leaves the film as it was and the image stays a normalised estimate.

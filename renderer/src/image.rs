@@ -1,4 +1,4 @@
-//! Linear RGB images: EXR and PNG output (design.md section 3), EXR input for references, and
+//! Linear RGB images: EXR and PNG output (DESIGN.md section 3), EXR input for references, and
 //! the error metrics every part of the project shares.
 
 use crate::geometry::luminance;
@@ -228,7 +228,7 @@ pub fn write_png_tone_mapped(
     })
 }
 
-/// Error of an image against a reference (design.md section 3).
+/// Error of an image against a reference (DESIGN.md section 3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ErrorMetrics {
     /// Mean over pixels and channels of (x - r)^2 / (r^2 + 0.01).

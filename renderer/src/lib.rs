@@ -16,7 +16,7 @@
 //! - A [`session::Session`] runs passes on background threads and publishes the newest
 //!   [`session::Frame`] without ever blocking the workers; the command line and the viewer
 //!   both drive this one API.
-//! - [`image`] holds linear images, EXR/PNG output and the error metrics of design.md section 3;
+//! - [`image`] holds linear images, EXR/PNG output and the error metrics of DESIGN.md section 3;
 //!   [`error_estimate`] estimates that error without a reference, from the integrator's own
 //!   samples, for every integrator and every frame.
 

@@ -1,4 +1,4 @@
-//! Progressive render sessions (design.md section 6): passes run on a background thread that
+//! Progressive render sessions (DESIGN.md section 6): passes run on a background thread that
 //! drives a rayon pool; after every pass the newest frame is published through an `ArcSwap`,
 //! so a reader (the viewer's UI thread, the command line's progress bar) gets it without
 //! waiting on any lock the workers hold, and frames are never queued: the newest wins.

@@ -491,7 +491,7 @@ fn a_chain_in_a_zero_state_moves_on() {
 }
 
 /// The same seed and pass count give the same image on one thread and on two: bdpt's t = 1
-/// splats are merged in row order and mmlt's chains in chain order (design.md section 6).
+/// splats are merged in row order and mmlt's chains in chain order (DESIGN.md section 6).
 #[test]
 fn bdpt_and_mmlt_images_do_not_depend_on_the_thread_count() {
     for (integrator, params) in [

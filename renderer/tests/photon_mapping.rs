@@ -236,7 +236,7 @@ fn a_million_passes_keep_the_radius_floor_and_exact_counts() {
 }
 
 /// Least-squares slope of log y against log x.
-/// Photons arriving behind a hit point's surface are ignored (design.md section 4): a camera
+/// Photons arriving behind a hit point's surface are ignored (DESIGN.md section 4): a camera
 /// looks up at the underside of a zero-thickness ceiling while a light and a roof above it
 /// send photons onto its top side, right where the underside's hit points are. Nothing lights
 /// the underside, so the image must be black. The ceiling's shading normals lean 70 degrees

@@ -1,6 +1,6 @@
 //! Integrators and their registry. Every integrator describes its parameters once (name,
 //! documentation, default, range, whether it can change while running); the command line,
-//! the viewer and the EXR header all read that one description (design.md section 7).
+//! the viewer and the EXR header all read that one description (DESIGN.md section 7).
 
 pub mod bdpt;
 pub mod mmlt;

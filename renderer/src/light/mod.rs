@@ -1,4 +1,4 @@
-//! Lights (design.md section 2): emissive triangles as area lights, glTF's punctual lights
+//! Lights (DESIGN.md section 2): emissive triangles as area lights, glTF's punctual lights
 //! (point, spot, directional; delta lights that no technique can hit), and a uniform
 //! environment for scenes without emitters. Sampling follows pbrt-v4 chapter 12: `sample_li`
 //! picks a point on the light as seen from a reference point and returns a solid-angle pdf

@@ -1,5 +1,5 @@
 //! KHR_lights_punctual: point, spot and directional lights. Photometric numbers are taken as
-//! radiometric as they stand (design.md section 1): a point or spot light's intensity is
+//! radiometric as they stand (DESIGN.md section 1): a point or spot light's intensity is
 //! radiant intensity (W/sr), a directional light's is irradiance (W/m^2) at normal incidence.
 
 use crate::geometry::Frame;

@@ -1,4 +1,4 @@
-//! Chooses lights in proportion to their power (design.md section 2; pbrt-v4's
+//! Chooses lights in proportion to their power (DESIGN.md section 2; pbrt-v4's
 //! `PowerLightSampler`, section 12.6.2), by luminance.
 
 use crate::geometry::luminance;

@@ -13,7 +13,7 @@
 //!
 //! With KHR_materials_transmission the dielectric part is split once more: a share
 //! `transmission` of it is a rough dielectric interface (Walter et al. 2007) tinted by the base
-//! colour, refracting as a solid of index `ior`, as design.md section 2 asks. The BSDF is a
+//! colour, refracting as a solid of index `ior`, as DESIGN.md section 2 asks. The BSDF is a
 //! linear mixture of three components and is sampled as a mixture of its lobes: a component is
 //! chosen by its weight, then a lobe within it; the pdf is the same mixture of lobe pdfs, so
 //! `sample_f` and `pdf` agree exactly.

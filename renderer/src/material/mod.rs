@@ -1,5 +1,5 @@
 //! Materials and BSDFs. A `Material` is the scene's description (glTF factors and textures);
-//! at a surface hit it becomes a `Bsdf`, a closed enum of the four kinds design.md section 2
+//! at a surface hit it becomes a `Bsdf`, a closed enum of the four kinds DESIGN.md section 2
 //! names, each modelling only what it needs. All BSDFs work in the local shading frame (+z is
 //! the shading normal) and serve both faces of a surface.
 
@@ -111,7 +111,7 @@ pub struct TextureRef {
     pub texture: u32,
 }
 
-/// Which BSDF a material needs, decided once from its factors (design.md section 2).
+/// Which BSDF a material needs, decided once from its factors (DESIGN.md section 2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MaterialKind {
     Diffuse,

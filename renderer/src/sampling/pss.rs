@@ -43,7 +43,7 @@ pub struct PssSampler {
     index: usize,
 }
 
-/// Maps x - floor(x) into [0, 1): in f32 it can round to exactly 1 (design.md section 5).
+/// Maps x - floor(x) into [0, 1): in f32 it can round to exactly 1 (DESIGN.md section 5).
 fn wrap(x: f32) -> f32 {
     let v = x - x.floor();
     if (0.0..1.0).contains(&v) { v } else { 0.0 }

@@ -1,6 +1,6 @@
 //! The sampler: every random number of the renderer is a hash of (seed, pixel, sample index,
 //! dimension), so the image never depends on which thread rendered which pixel or in what
-//! order (design.md section 7). Independent uniform numbers; stratified or low-discrepancy
+//! order (DESIGN.md section 7). Independent uniform numbers; stratified or low-discrepancy
 //! sequences can replace the hash behind the same interface.
 
 use glam::Vec2;

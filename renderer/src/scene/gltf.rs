@@ -1,5 +1,5 @@
 //! glTF 2.0 loader (`.gltf` with external or embedded buffers, and `.glb`), interpreting the
-//! file exactly as design.md section 2 says. Bad input is an error naming the file and the
+//! file exactly as DESIGN.md section 2 says. Bad input is an error naming the file and the
 //! problem, never a panic: buffer views and accessors are bounds-checked before anything
 //! reads them, the node graph is walked with a depth limit, and as a last line of defence a
 //! panic inside the gltf crate is caught and reported as an error.

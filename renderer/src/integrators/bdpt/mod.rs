@@ -3,7 +3,7 @@
 //! (s light vertices, t camera vertices) of each path length, weighted by the balance
 //! heuristic. Strategies with t = 1 land anywhere on the film: they are splatted into
 //! per-row buffers merged in row order into the pass's own image, so the image depends only on
-//! the seed and the pass count, up to the order of the splats' floating-point sums (design.md
+//! the seed and the pass count, up to the order of the splats' floating-point sums (DESIGN.md
 //! section 6), and every pass, splats included, is an independent estimate of every pixel:
 //! the film estimates the remaining error from their spread, as for the path tracer.
 //!

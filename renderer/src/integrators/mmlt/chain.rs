@@ -109,7 +109,7 @@ impl Chain {
                 out.large_step_sum_sq += (y as f64) * (y as f64);
                 out.large_steps += 1;
             }
-            // A current state of zero luminance accepts any proposal (design.md section 5).
+            // A current state of zero luminance accepts any proposal (DESIGN.md section 5).
             let a = if self.current_y > 0.0 {
                 (y / self.current_y).min(1.0)
             } else {

@@ -2,7 +2,7 @@
 //! space serial tempering"): Metropolis chains in primary sample space over bidirectional
 //! paths of a fixed length, whose state also selects the technique (s, t) that maps it to a
 //! path, targeting the MIS-weighted contribution, so a chain settles on the techniques that
-//! suit each region (design.md section 5).
+//! suit each region (DESIGN.md section 5).
 //!
 //! A pass is width x height steps shared equally among the chains; chains run in parallel
 //! and their splats are merged in chain order.

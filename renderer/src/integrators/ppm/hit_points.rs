@@ -1,7 +1,7 @@
 //! The eye pass of photon mapping (Hachisuka et al. 2008, section 4.1): a camera ray follows
 //! specular bounces to the first surface with a non-delta BSDF and leaves a hit point there.
 //! Emission met on the way and direct light at the hit point (next-event estimation without
-//! MIS: photons never carry direct light) form the pixel's direct estimate (design.md 4).
+//! MIS: photons never carry direct light) form the pixel's direct estimate (DESIGN.md 4).
 
 use crate::geometry::Ray;
 use crate::integrators::path::sample_direct;

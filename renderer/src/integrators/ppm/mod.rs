@@ -3,7 +3,7 @@
 //! pass (`hit_points`), one photon tracer and one spatial hash grid (`hash_grid`).
 //!
 //! After every photon pass each hit point with M > 0 new photons is updated by Hachisuka et
-//! al. 2008, eqs. 5-7, in area form (design.md section 4):
+//! al. 2008, eqs. 5-7, in area form (DESIGN.md section 4):
 //!
 //! ```text
 //! N' = N + alpha M
@@ -58,7 +58,7 @@
 //!
 //! Photon splats are accumulated per worker without locks and merged after the pass; the
 //! merge order is fixed, so a given seed and thread count give the same image, and other
-//! thread counts differ only in the order of floating-point sums (design.md section 6).
+//! thread counts differ only in the order of floating-point sums (DESIGN.md section 6).
 
 pub mod hash_grid;
 pub mod hit_points;
