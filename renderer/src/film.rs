@@ -11,6 +11,7 @@
 use crate::error_estimate::{self, ErrorEstimate, PixelError};
 use crate::image::Image;
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 
 #[derive(Clone, Debug)]
 pub struct Film {
@@ -67,13 +68,14 @@ impl Film {
         }
         let n = self.passes;
         let (n_odd, n_even) = ((n / 2) as f64, n.div_ceil(2) as f64);
-        let odd: Vec<DVec3> = self.odd_sum.iter().map(|s| *s / n_odd).collect();
-        let even: Vec<DVec3> = (self.sum.iter().zip(&self.odd_sum))
+        let odd: Vec<DVec3> = self.odd_sum.par_iter().map(|s| *s / n_odd).collect();
+        let even: Vec<DVec3> = (self.sum.par_iter().zip(&self.odd_sum))
             .map(|(s, o)| (*s - *o) / n_even)
             .collect();
         let reference_sq =
             error_estimate::robust_reference_sq(&[odd, even], self.width, self.height);
         let pixels: Vec<PixelError> = (0..self.sum.len())
+            .into_par_iter()
             .map(|i| PixelError {
                 variance: error_estimate::variance_of_mean(self.sum[i], self.sum_sq[i], n),
                 bias_sq: DVec3::ZERO,

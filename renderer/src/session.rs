@@ -63,7 +63,9 @@ pub struct Frame {
     /// The integrator's statistics as JSON, if it keeps any (MMLT's technique histogram).
     pub statistics: Arc<Option<serde_json::Value>>,
     /// The image's remaining error estimated without a reference (None until the integrator
-    /// has enough samples to estimate it).
+    /// has enough samples to estimate it). Renewed after every pass where that costs little,
+    /// else as often as it costs a tenth of the time (so it may be a few passes old), and
+    /// always for a run's last frame.
     pub error: Arc<Option<ErrorEstimate>>,
     pub passes: u64,
     pub samples: u64,
@@ -268,15 +270,49 @@ struct Estimate {
 }
 
 impl Estimate {
-    fn of(integrator: &dyn Integrator) -> Estimate {
+    /// The integrator's state; the error estimate anew only if `error` is None (else kept).
+    fn of(integrator: &dyn Integrator, error: Option<Arc<Option<ErrorEstimate>>>) -> Estimate {
         Estimate {
             image: Arc::new(integrator.image()),
             plots: Arc::new(integrator.plots()),
             pixel_layers: Arc::new(integrator.pixel_layers()),
             messages: Arc::new(integrator.messages()),
             statistics: Arc::new(integrator.statistics()),
-            error: Arc::new(integrator.error_estimate()),
+            error: error.unwrap_or_else(|| Arc::new(integrator.error_estimate())),
         }
+    }
+}
+
+/// When to estimate the remaining error anew. The estimate reads every pixel's sums a few
+/// times; on a small image whose passes take a millisecond it would slow the render down by
+/// half. So it is renewed only once it has cost at most a tenth of the time since the last
+/// one (every pass where passes are slow), and always for the last frame of a run.
+struct ErrorSchedule {
+    last: Option<Instant>,
+    cost: Duration,
+}
+
+impl ErrorSchedule {
+    fn due(&self) -> bool {
+        self.last
+            .is_none_or(|t| t.elapsed() >= self.cost.saturating_mul(10))
+    }
+
+    /// The estimate for the state after a pass: a new one when due or `last_frame`.
+    fn estimate(
+        &mut self,
+        integrator: &dyn Integrator,
+        previous: &Estimate,
+        last_frame: bool,
+    ) -> Estimate {
+        if !(last_frame || self.due()) {
+            return Estimate::of(integrator, Some(previous.error.clone()));
+        }
+        let started = Instant::now();
+        let error = Arc::new(integrator.error_estimate());
+        self.cost = started.elapsed();
+        self.last = Some(Instant::now());
+        Estimate::of(integrator, Some(error))
     }
 }
 
@@ -335,7 +371,11 @@ fn run(
             notify();
         }
     };
-    let mut estimate = Estimate::of(integrator.as_ref());
+    let mut estimate = Estimate::of(integrator.as_ref(), None);
+    let mut schedule = ErrorSchedule {
+        last: None,
+        cost: Duration::ZERO,
+    };
     loop {
         let elapsed = start.elapsed() - paused_for;
         if shared.cancel.load(Ordering::Relaxed) {
@@ -374,7 +414,14 @@ fn run(
             Ok(stats) => {
                 passes += 1;
                 totals = totals + stats;
-                estimate = Estimate::of(integrator.as_ref());
+                let elapsed = start.elapsed() - paused_for;
+                let last_frame = limits.passes.is_some_and(|m| passes >= m)
+                    || limits.time.is_some_and(|t| elapsed >= t);
+                // On the session's pool, so that an estimate that uses rayon uses its threads.
+                // (A mutable borrow: the integrator is Send but not Sync.)
+                let (renderer, previous, due) = (&mut integrator, &estimate, &mut schedule);
+                estimate =
+                    pool.install(move || due.estimate(renderer.as_ref(), previous, last_frame));
                 publish(
                     &estimate,
                     passes,

@@ -443,10 +443,11 @@ impl Integrator for MmltIntegrator {
         );
         let estimates: Vec<Vec<DVec3>> = self.group_splats[..groups]
             .iter()
-            .map(|splats| splats.iter().map(|v| *v * scale).collect())
+            .map(|splats| splats.par_iter().map(|v| *v * scale).collect())
             .collect();
         let reference_sq = error_estimate::robust_reference_sq(&estimates, w, h);
         let pixels: Vec<PixelError> = (0..w * h)
+            .into_par_iter()
             .map(|i| {
                 let mean = estimates.iter().map(|e| e[i]).sum::<DVec3>() / g;
                 let spread: DVec3 = estimates

@@ -584,26 +584,32 @@ impl PhotonMapper {
             self.ctx.camera.width as usize,
             self.ctx.camera.height as usize,
         );
-        let indirect: Vec<DVec3> = (0..self.pixels.len()).map(|i| self.indirect(i)).collect();
+        let indirect: Vec<DVec3> = (0..self.pixels.len())
+            .into_par_iter()
+            .map(|i| self.indirect(i))
+            .collect();
         let noise: Vec<DVec3> = pixels.iter().map(|p| p.variance).collect();
-        for y in 0..h {
-            for x in 0..w {
-                let i = y * w + x;
-                let mut sum = DVec3::ZERO;
-                let mut count = 0.0;
-                let horizontal = (x > 0 && x + 1 < w).then(|| (i - 1, i + 1));
-                let vertical = (y > 0 && y + 1 < h).then(|| (i - w, i + w));
-                for b in [horizontal, vertical].into_iter().flatten() {
-                    let d = indirect[i] - 0.5 * (indirect[b.0] + indirect[b.1]);
-                    sum += d * d - noise[i] - 0.25 * (noise[b.0] + noise[b.1]);
-                    count += 1.0;
+        pixels
+            .par_chunks_mut(w.max(1))
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, pixel) in row.iter_mut().enumerate() {
+                    let i = y * w + x;
+                    let mut sum = DVec3::ZERO;
+                    let mut count = 0.0;
+                    let horizontal = (x > 0 && x + 1 < w).then(|| (i - 1, i + 1));
+                    let vertical = (y > 0 && y + 1 < h).then(|| (i - w, i + w));
+                    for b in [horizontal, vertical].into_iter().flatten() {
+                        let d = indirect[i] - 0.5 * (indirect[b.0] + indirect[b.1]);
+                        sum += d * d - noise[i] - 0.25 * (noise[b.0] + noise[b.1]);
+                        count += 1.0;
+                    }
+                    if count > 0.0 {
+                        pixel.variance +=
+                            (sum / (1.5 * count * EDGE_DOUBLE_COUNT)).max(DVec3::ZERO);
+                    }
                 }
-                if count > 0.0 {
-                    pixels[i].variance +=
-                        (sum / (1.5 * count * EDGE_DOUBLE_COUNT)).max(DVec3::ZERO);
-                }
-            }
-        }
+            });
     }
 
     fn record_radius(&mut self) {
@@ -711,12 +717,12 @@ impl Integrator for PhotonMapper {
         let (n_odd, n_even) = ((n / 2) as f64, n.div_ceil(2) as f64);
         let odd: Vec<DVec3> = self
             .pixels
-            .iter()
+            .par_iter()
             .map(|p| p.odd_estimate_sum / n_odd)
             .collect();
         let even: Vec<DVec3> = self
             .pixels
-            .iter()
+            .par_iter()
             .map(|p| (p.estimate_sum - p.odd_estimate_sum) / n_even)
             .collect();
         let (w, h) = (image.width, image.height);
@@ -726,11 +732,12 @@ impl Integrator for PhotonMapper {
         // over the neighbourhood, as the estimate itself is three times noisier than x).
         let bias: Vec<DVec3> = self
             .pixels
-            .iter()
+            .par_iter()
             .map(|p| p.bias_sum / n as f64)
             .collect();
         let bias = error_estimate::box_filter_3x3(&bias, w, h);
         let reference_sq: Vec<DVec3> = (0..self.pixels.len())
+            .into_par_iter()
             .map(|i| {
                 let r = robust[i]
                     .to_array()
@@ -744,8 +751,8 @@ impl Integrator for PhotonMapper {
             .collect();
         let mut pixels: Vec<PixelError> = self
             .pixels
-            .iter()
-            .zip(reference_sq)
+            .par_iter()
+            .zip(reference_sq.into_par_iter())
             .map(|(px, reference_sq)| {
                 let bias = px.bias_sum / n as f64;
                 let bias_variance =
