@@ -12,17 +12,13 @@ use std::time::Instant;
 pub struct InfoArgs {
     /// Scene to examine (.gltf or .glb).
     pub scene: PathBuf,
-    /// Image width the advice is for [default: 512, or from --height and the camera].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-    pub width: Option<u32>,
-    /// Image height [default: from the width and the camera's aspect ratio, else square].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-    pub height: Option<u32>,
+    #[command(flatten)]
+    pub size: crate::render::SizeArgs,
 }
 
 pub fn run(args: &InfoArgs) -> Result<(), crate::render::Failure> {
     let scene = gltf::load(&args.scene).map_err(|e| anyhow!(e))?;
-    let (width, height) = crate::render::output_size(args.width, args.height, scene.camera.aspect);
+    let (width, height) = args.size.resolve(scene.camera.aspect);
     let started = Instant::now();
     let (s, r) = transport::analyse(&scene, width, height);
     let i = &scene.info;

@@ -20,12 +20,8 @@ pub struct ReferenceArgs {
     /// Seconds to render.
     #[arg(long, value_parser = crate::render::parse_seconds)]
     pub time: f64,
-    /// Image width [default: 512, or from --height and the camera's aspect ratio].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-    pub width: Option<u32>,
-    /// Image height [default: from the width and the camera's aspect ratio, else square].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-    pub height: Option<u32>,
+    #[command(flatten)]
+    pub size: crate::render::SizeArgs,
     /// Seed (a reference for runs of seed 0 is best rendered with another).
     #[arg(long, default_value_t = 1_000_000)]
     pub seed: u64,
@@ -51,7 +47,7 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
     }
     let scene = gltf::load(&args.scene).map_err(|e| anyhow!(e))?;
     let (width, height) =
-        crate::render::output_size(args.width, args.height, scene.camera.aspect);
+        args.size.resolve(scene.camera.aspect);
     let survey = transport::survey_at(&scene, width, height);
     let r = survey.reference(width, height, scene.camera.yfov);
     eprintln!("reference with {}: {}", r.integrator, r.reasons.join("; "));
@@ -63,8 +59,10 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
         spp: None,
         time: Some(args.time),
         until_error: None,
-        width: Some(width),
-        height: Some(height),
+        size: crate::render::SizeArgs {
+            width: Some(width),
+            height: Some(height),
+        },
         seed: args.seed,
         threads: args.threads,
         max_depth: None,

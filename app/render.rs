@@ -33,12 +33,8 @@ pub struct RenderArgs {
     /// still cap the run).
     #[arg(long, value_name = "E", value_parser = parse_positive, allow_negative_numbers = true)]
     pub until_error: Option<f64>,
-    /// Image width in pixels [default: 512, or from --height and the camera's aspect ratio].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-    pub width: Option<u32>,
-    /// Image height in pixels [default: from the width and the camera's aspect ratio, else square].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-    pub height: Option<u32>,
+    #[command(flatten)]
+    pub size: SizeArgs,
     /// Seed of every random number; the same seed gives the same image on any thread count.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -86,6 +82,24 @@ pub fn parse_seconds(s: &str) -> Result<f64, String> {
         Ok(v)
     } else {
         Err(format!("'{s}' must be a positive number of seconds"))
+    }
+}
+
+/// The image size flags of the subcommands that render.
+#[derive(Args, Debug, Clone, Copy)]
+pub struct SizeArgs {
+    /// Image width in pixels [default: 512, or from --height and the camera's aspect ratio].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub width: Option<u32>,
+    /// Image height in pixels [default: from the width and the camera's aspect ratio, else square].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    pub height: Option<u32>,
+}
+
+impl SizeArgs {
+    /// The size for a camera of aspect ratio `aspect` (`output_size`).
+    pub fn resolve(&self, aspect: Option<f32>) -> (u32, u32) {
+        output_size(self.width, self.height, aspect)
     }
 }
 
@@ -202,7 +216,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         si.load_time.as_secs_f64() * 1e3,
         si.bvh_build_time.as_secs_f64() * 1e3
     );
-    let (width, height) = output_size(args.width, args.height, scene.camera.aspect);
+    let (width, height) = args.size.resolve(scene.camera.aspect);
     for w in &si.warnings {
         eprintln!("warning: {w}");
     }

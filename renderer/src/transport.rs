@@ -23,7 +23,7 @@ use crate::camera::PerspectiveCamera;
 use crate::integrators::ParamValues;
 use crate::integrators::path::sample_direct;
 use crate::integrators::scatter;
-use crate::light::emission::sample_le;
+use crate::light::emission::emit_photon;
 use crate::material::{Bsdf, TransportMode};
 use crate::sampling::sampler::Sampler;
 use crate::scene::Scene;
@@ -115,15 +115,9 @@ pub fn survey(
     let (mut flux_all, mut flux_caustic, mut flux_delta_caustic) = (0.0f64, 0.0f64, 0.0f64);
     for i in 0..light_paths {
         sampler.start_pixel_sample(i as u64, 1);
-        let Some((light, pmf)) = scene.light_sampler.sample(sampler.get_1d()) else {
-            break;
-        };
-        let (u_pos, u_dir, u_side) = (sampler.get_2d(), sampler.get_2d(), sampler.get_1d());
-        let Some(emitted) = sample_le(scene, &scene.lights[light], u_pos, u_dir, u_side) else {
+        let Some((light, mut ray, mut flux)) = emit_photon(scene, &mut sampler) else {
             continue;
         };
-        let mut flux = emitted.flux() / pmf;
-        let mut ray = emitted.ray;
         for depth in 0..=MAX_SPECULAR_DEPTH {
             let Some(si) = scene.intersect(&ray) else {
                 break;

@@ -43,6 +43,19 @@ impl EmittedRay {
     }
 }
 
+/// A photon: a light chosen in proportion to power, a ray leaving it, and the photon's flux
+/// (the ray's power weight over the light's selection probability). Draws five uniform
+/// numbers from `sampler`, in the order the photon mappers have always drawn them.
+pub fn emit_photon(
+    scene: &Scene,
+    sampler: &mut impl crate::sampling::sampler::SampleSource,
+) -> Option<(usize, Ray, Vec3)> {
+    let (light, pmf) = scene.light_sampler.sample(sampler.get_1d())?;
+    let (u_pos, u_dir, u_side) = (sampler.get_2d(), sampler.get_2d(), sampler.get_1d());
+    let emitted = sample_le(scene, &scene.lights[light], u_pos, u_dir, u_side)?;
+    Some((light, emitted.ray, emitted.flux() / pmf))
+}
+
 /// Samples a ray leaving `light` with uniform numbers `u_pos`, `u_dir` and `u_side`.
 pub fn sample_le(
     scene: &Scene,

@@ -72,7 +72,7 @@ use crate::integrators::{
     Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PixelLayer, PlotKind, PlotSeries,
     RenderContext,
 };
-use crate::light::emission::sample_le;
+use crate::light::emission::emit_photon;
 use crate::material::TransportMode;
 use crate::sampling::sampler::Sampler;
 use glam::{DVec3, Vec2, Vec3};
@@ -500,15 +500,9 @@ impl PhotonMapper {
         st: &mut PassStats,
     ) {
         let scene = &*self.ctx.scene;
-        let Some((light, pmf)) = scene.light_sampler.sample(sampler.get_1d()) else {
+        let Some((_, mut ray, mut flux)) = emit_photon(scene, sampler) else {
             return;
         };
-        let (u_pos, u_dir, u_side) = (sampler.get_2d(), sampler.get_2d(), sampler.get_1d());
-        let Some(emitted) = sample_le(scene, &scene.lights[light], u_pos, u_dir, u_side) else {
-            return;
-        };
-        let mut flux = emitted.flux() / pmf;
-        let mut ray = emitted.ray;
         for depth in 0..self.settings.max_depth {
             st.rays += 1;
             let Some(si) = scene.intersect(&ray) else {
