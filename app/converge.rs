@@ -24,7 +24,8 @@ pub struct ConvergeArgs {
     /// Converged image (EXR) of the same view and size, for the true error.
     #[arg(long)]
     pub reference: Option<PathBuf>,
-    /// Integrators to compare (repeat the flag or separate with commas).
+    /// Integrators to compare (repeat the flag or separate with commas); `recommended` is the
+    /// integrator and parameters `caustica info` recommends for the scene at this size.
     #[arg(long = "integrator", required = true, value_delimiter = ',', num_args = 1..)]
     pub integrators: Vec<String>,
     /// A parameter and the values to sweep, NAME=V1,V2,...; repeat for several (every
@@ -60,17 +61,25 @@ pub struct RunSpec {
     pub integrator: String,
     /// The parameters given on the command line (the rest are the defaults).
     pub given: ParamValues,
+    /// The run `caustica info` recommends for the scene.
+    pub recommended: bool,
 }
 
 impl RunSpec {
     pub fn label(&self) -> String {
         let mut label = self.integrator.clone();
         for (k, v) in &self.given {
-            label += &format!(" {k}={v}");
+            label += &format!(" {k}={}", crate::info::format_value(*v));
+        }
+        if self.recommended {
+            label += " (recommended)";
         }
         label
     }
 }
+
+/// The integrator name that stands for the scene's recommended integrator and parameters.
+pub const RECOMMENDED: &str = "recommended";
 
 /// One checkpoint of a run.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -117,6 +126,15 @@ pub fn runs(integrators_given: &[String], sweeps: &[String]) -> Result<Vec<RunSp
         .collect::<Result<_, _>>()?;
     let mut out = Vec::new();
     for name in integrators_given {
+        if name == RECOMMENDED {
+            // Resolved once the scene is loaded (`run`).
+            out.push(RunSpec {
+                integrator: RECOMMENDED.into(),
+                given: ParamValues::new(),
+                recommended: true,
+            });
+            continue;
+        }
         let info = integrators::find(name).ok_or_else(|| {
             let known: Vec<_> = integrators::registry().iter().map(|i| i.name).collect();
             format!("--integrator {name}: unknown (known: {})", known.join(", "))
@@ -143,6 +161,7 @@ pub fn runs(integrators_given: &[String], sweeps: &[String]) -> Result<Vec<RunSp
             out.push(RunSpec {
                 integrator: name.clone(),
                 given,
+                recommended: false,
             });
         }
     }
@@ -318,6 +337,12 @@ pub fn run(args: &ConvergeArgs) -> Result<(), crate::render::Failure> {
         .map_err(|e| anyhow!("reference: {e}"))?;
     let scene = Arc::new(gltf::load(&args.scene).map_err(|e| anyhow!(e))?);
     let (width, height) = image_size(args, &scene, reference.as_ref());
+    let mut specs = specs;
+    for spec in specs.iter_mut().filter(|s| s.recommended) {
+        let (_, r) = caustica_renderer::transport::analyse(&scene, width, height);
+        spec.integrator = r.integrator.to_string();
+        spec.given = r.params;
+    }
     if let Some(r) = &reference
         && (r.width as u32, r.height as u32) != (width, height)
     {
@@ -388,8 +413,15 @@ pub fn summary(all: &[Vec<Record>], checkpoints: &[f64], have_reference: bool) -
     } else {
         "estimated relMSE"
     };
+    let width = all
+        .iter()
+        .filter_map(|r| r.first())
+        .map(|r| r.run.len())
+        .max()
+        .unwrap_or(3)
+        .max(3);
     let mut out = format!(
-        "{:<28} {:>8} {:>9} {:>12} {:>12} {:>8} {:>7}\n",
+        "{:<width$} {:>8} {:>9} {:>12} {:>12} {:>8} {:>7}\n",
         "run", "seconds", "passes", "relMSE", "estimated", "est/true", "slope"
     );
     let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3e}"));
@@ -401,7 +433,7 @@ pub fn summary(all: &[Vec<Record>], checkpoints: &[f64], have_reference: bool) -
         };
         let from = (last.seconds / 10.0).min(1.0);
         out += &format!(
-            "{:<28} {:>8.1} {:>9} {:>12} {:>12} {:>8} {:>7}\n",
+            "{:<width$} {:>8.1} {:>9} {:>12} {:>12} {:>8} {:>7}\n",
             last.run,
             last.seconds,
             last.passes,
@@ -451,6 +483,8 @@ mod tests {
         assert!(super::runs(&["sppm".into()], &["alpha=2".into()]).is_err());
         assert!(super::runs(&["sppm".into()], &["alpha".into()]).is_err());
         assert!(super::runs(&["nope".into()], &[]).is_err());
+        let r = super::runs(&["recommended".into()], &[]).unwrap();
+        assert!(r[0].recommended);
     }
 
     #[test]
