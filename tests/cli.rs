@@ -27,24 +27,24 @@ fn path_str(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// `caustica render SCENE -o OUT FLAGS...`
+fn render(scene: &str, out: &Path, flags: &[&str]) -> Output {
+    let mut args = vec!["render", scene, "-o", path_str(out)];
+    args.extend_from_slice(flags);
+    caustica(&args)
+}
+
 #[test]
 fn renders_the_cornell_box_to_exr_with_metadata() {
     let dir = temp_dir("exr");
     let out = dir.join("box.exr");
-    let o = caustica(&[
-        "render",
+    let o = render(
         "assets/cornell-box.gltf",
-        "-o",
-        path_str(&out),
-        "--spp",
-        "4",
-        "--width",
-        "48",
-        "--height",
-        "32",
-        "--seed",
-        "9",
-    ]);
+        &out,
+        &[
+            "--spp", "4", "--width", "48", "--height", "32", "--seed", "9",
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("Mrays/s"),
@@ -68,20 +68,20 @@ fn renders_the_cornell_box_to_exr_with_metadata() {
 fn renders_png_and_honours_max_depth() {
     let dir = temp_dir("png");
     let out = dir.join("glass.png");
-    let o = caustica(&[
-        "render",
+    let o = render(
         "assets/cornell-glass.gltf",
-        "-o",
-        path_str(&out),
-        "--spp",
-        "2",
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--max-depth",
-        "3",
-    ]);
+        &out,
+        &[
+            "--spp",
+            "2",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--max-depth",
+            "3",
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let png = std::fs::read(&out).unwrap();
     assert_eq!(&png[1..4], b"PNG");
@@ -264,30 +264,30 @@ fn the_viewer_without_a_display_fails_clearly() {
 fn mmlt_on_the_door_writes_its_technique_histogram() {
     let dir = temp_dir("mmlt");
     let (out, stats) = (dir.join("door.exr"), dir.join("door.json"));
-    let o = caustica(&[
-        "render",
+    let o = render(
         "assets/door.gltf",
-        "-o",
-        path_str(&out),
-        "--integrator",
-        "mmlt",
-        "--spp",
-        "4",
-        "--width",
-        "40",
-        "--large-step",
-        "0.5",
-        "--sigma",
-        "0.02",
-        "--bootstrap",
-        "2000",
-        "--chains",
-        "50",
-        "--max-depth",
-        "5",
-        "--stats",
-        path_str(&stats),
-    ]);
+        &out,
+        &[
+            "--integrator",
+            "mmlt",
+            "--spp",
+            "4",
+            "--width",
+            "40",
+            "--large-step",
+            "0.5",
+            "--sigma",
+            "0.02",
+            "--bootstrap",
+            "2000",
+            "--chains",
+            "50",
+            "--max-depth",
+            "5",
+            "--stats",
+            path_str(&stats),
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let (image, meta) = read_exr(&out).unwrap();
     assert_eq!(image.count_non_finite(), 0);
@@ -314,29 +314,17 @@ fn mmlt_on_the_door_writes_its_technique_histogram() {
     assert_eq!(counted, 4 * 50 * 32);
 
     // bdpt renders too, and an MMLT flag given to another integrator is refused.
-    let o = caustica(&[
-        "render",
+    let o = render(
         "assets/cornell-box.gltf",
-        "-o",
-        path_str(&dir.join("b.exr")),
-        "--integrator",
-        "bdpt",
-        "--spp",
-        "2",
-        "--width",
-        "24",
-    ]);
+        &dir.join("b.exr"),
+        &["--integrator", "bdpt", "--spp", "2", "--width", "24"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
-    let o = caustica(&[
-        "render",
+    let o = render(
         "assets/cornell-box.gltf",
-        "-o",
-        path_str(&dir.join("c.exr")),
-        "--integrator",
-        "pt",
-        "--sigma",
-        "0.1",
-    ]);
+        &dir.join("c.exr"),
+        &["--integrator", "pt", "--sigma", "0.1"],
+    );
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("sigma"), "{}", stderr(&o));
 }
@@ -347,20 +335,20 @@ fn mmlt_on_the_door_writes_its_technique_histogram() {
 fn render_until_an_estimated_error_and_record_it() {
     let dir = temp_dir("until");
     let (out, stats) = (dir.join("box.exr"), dir.join("box.json"));
-    let o = caustica(&[
-        "render",
+    let o = render(
         "assets/cornell-box.gltf",
-        "-o",
-        path_str(&out),
-        "--width",
-        "32",
-        "--until-error",
-        "0.02",
-        "--time",
-        "30",
-        "--stats",
-        path_str(&stats),
-    ]);
+        &out,
+        &[
+            "--width",
+            "32",
+            "--until-error",
+            "0.02",
+            "--time",
+            "30",
+            "--stats",
+            path_str(&stats),
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("is below 2e-2"), "{}", stderr(&o));
     let (_, meta) = read_exr(&out).unwrap();
@@ -370,18 +358,14 @@ fn render_until_an_estimated_error_and_record_it() {
     // It stopped at the first pass below: the pass before was above (relMSE falls like 1/n,
     // so with n passes the estimate is at least 0.02 (n - 1) / n, give or take its noise).
     let passes: f64 = meta["passes"].parse().unwrap();
-    assert!(estimated > 0.02 * (passes - 1.0) / passes * 0.7, "{estimated} after {passes}");
+    assert!(
+        estimated > 0.02 * (passes - 1.0) / passes * 0.7,
+        "{estimated} after {passes}"
+    );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     assert_eq!(json["estimated_relmse"].as_f64(), Some(estimated));
-    let o = caustica(&[
-        "render",
-        "assets/cornell-box.gltf",
-        "-o",
-        path_str(&out),
-        "--until-error",
-        "-1",
-    ]);
+    let o = render("assets/cornell-box.gltf", &out, &["--until-error", "-1"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -393,18 +377,11 @@ fn render_until_an_estimated_error_and_record_it() {
 fn converge_measures_every_run_against_the_reference() {
     let dir = temp_dir("converge");
     let reference = dir.join("ref.exr");
-    let o = caustica(&[
-        "render",
+    let o = render(
         "assets/cornell-box.gltf",
-        "-o",
-        path_str(&reference),
-        "--width",
-        "32",
-        "--spp",
-        "1024",
-        "--seed",
-        "77",
-    ]);
+        &reference,
+        &["--width", "32", "--spp", "1024", "--seed", "77"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let out = dir.join("measured");
     let o = caustica(&[
@@ -489,10 +466,10 @@ fn converge_measures_every_run_against_the_reference() {
 /// renders with it and writes its estimated error.
 #[test]
 fn info_recommends_and_reference_renders_with_the_recommendation() {
-    for (scene, expected) in [
-        ("assets/cornell-box.gltf", "pt"),
-        ("assets/caustic-pool.gltf", "sppm"),
-        ("assets/door.gltf", "bdpt"),
+    for (scene, expected, reference) in [
+        ("assets/cornell-box.gltf", "pt", "pt"),
+        ("assets/caustic-pool.gltf", "sppm", "sppm"),
+        ("assets/door.gltf", "mmlt", "bdpt"),
     ] {
         let o = caustica(&["info", scene, "--width", "64"]);
         assert!(o.status.success(), "{}", stderr(&o));
@@ -503,6 +480,10 @@ fn info_recommends_and_reference_renders_with_the_recommendation() {
         );
         assert!(
             stdout.contains(&format!("--integrator {expected}")),
+            "{stdout}"
+        );
+        assert!(
+            stdout.contains(&format!("renders with {reference}\n")),
             "{stdout}"
         );
     }
@@ -522,7 +503,14 @@ fn info_recommends_and_reference_renders_with_the_recommendation() {
     let (_, meta) = read_exr(&out).unwrap();
     assert_eq!(meta["integrator"], "sppm");
     assert!(meta["estimated_relmse"].parse::<f64>().unwrap() > 0.0);
-    let o = caustica(&["reference", "assets/door.gltf", "-o", "x.png", "--time", "1"]);
+    let o = caustica(&[
+        "reference",
+        "assets/door.gltf",
+        "-o",
+        "x.png",
+        "--time",
+        "1",
+    ]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -535,28 +523,28 @@ fn info_recommends_and_reference_renders_with_the_recommendation() {
 #[test]
 fn merging_runs_equals_one_longer_run() {
     let dir = temp_dir("merge");
-    let render = |name: &str, spp: u32, seed: u32| {
+    let render_box = |name: &str, spp: u32, seed: u32| {
         let path = dir.join(name);
-        let o = caustica(&[
-            "render",
+        let o = render(
             "assets/cornell-box.gltf",
-            "-o",
-            path_str(&path),
-            "--width",
-            "32",
-            "--spp",
-            &spp.to_string(),
-            "--seed",
-            &seed.to_string(),
-        ]);
+            &path,
+            &[
+                "--width",
+                "32",
+                "--spp",
+                &spp.to_string(),
+                "--seed",
+                &seed.to_string(),
+            ],
+        );
         assert!(o.status.success(), "{}", stderr(&o));
         path
     };
-    let reference = render("ref.exr", 4096, 1000);
-    let long = render("long.exr", 24, 50);
+    let reference = render_box("ref.exr", 4096, 1000);
+    let long = render_box("long.exr", 24, 50);
     let parts: Vec<PathBuf> = [(2, 1), (4, 2), (6, 3), (12, 4)]
         .iter()
-        .map(|(spp, seed)| render(&format!("part{seed}.exr"), *spp, *seed))
+        .map(|(spp, seed)| render_box(&format!("part{seed}.exr"), *spp, *seed))
         .collect();
     let merged_path = dir.join("merged.exr");
     let mut args = vec!["merge"];
@@ -569,13 +557,23 @@ fn merging_runs_equals_one_longer_run() {
     let (merged, meta) = read_exr(&merged_path).unwrap();
     assert_eq!(meta["passes"], "24");
     assert_eq!(meta["seed"], "1,2,3,4");
-    let error = |img| caustica_renderer::image::compare(img, &reference).unwrap().rel_mse;
+    let error = |img| {
+        caustica_renderer::image::compare(img, &reference)
+            .unwrap()
+            .rel_mse
+    };
     let (e_long, e_merged) = (error(&long), error(&merged));
     eprintln!("relMSE: one run of 24 passes {e_long:.4e}, four merged {e_merged:.4e}");
-    assert!((e_merged / e_long - 1.0).abs() < 0.3, "{e_merged} vs {e_long}");
+    assert!(
+        (e_merged / e_long - 1.0).abs() < 0.3,
+        "{e_merged} vs {e_long}"
+    );
     let estimated: f64 = meta["estimated_relmse"].parse().unwrap();
     let long_estimated: f64 = long_meta["estimated_relmse"].parse().unwrap();
-    assert!((estimated / long_estimated - 1.0).abs() < 0.3, "{estimated} vs {long_estimated}");
+    assert!(
+        (estimated / long_estimated - 1.0).abs() < 0.3,
+        "{estimated} vs {long_estimated}"
+    );
     // Two runs with one seed are the same samples: refused.
     let o = caustica(&[
         "merge",
