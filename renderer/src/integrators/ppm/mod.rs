@@ -49,12 +49,15 @@
 //!   image's second differences (the nugget of a variogram): for a pixel whose neighbours' hit
 //!   points are independent draws, E[(I_p - (I_l + I_r) / 2)^2] = 1.5 V + their noise +
 //!   curvature^2, so V is 2/3 of the mean of the horizontal and vertical squared second
-//!   differences less the noise variances. At an edge this counts the edge pixel's variance
-//!   1.5 times over (across a straight edge its neighbours' second differences see it too,
-//!   along it the count is exact): measured on the Cornell box with a glass sphere, whose
-//!   footprint variance is almost all at edges, the estimate was 1.8 times the truth, so it is
-//!   divided by `EDGE_DOUBLE_COUNT` = 1.5; detail finer than a pixel with no edge (a texture's
-//!   noise) is then underestimated by that factor.
+//!   differences less the noise variances. The pixel's converged value is the mean over its
+//!   footprint, so this variance is divided by the square of that mean, estimated by the 3x3
+//!   mean of the image, not by the pixel's own value: a feature thinner than a pixel (the lit
+//!   gap of the door) is missed by most pixels' hit points, whose own values are then far
+//!   below the truth. (Dividing by the pixel's own value overestimated the door's relMSE 49
+//!   times; an earlier correction for edge pixels counted twice, calibrated with that
+//!   denominator, proved to be compensating it, and is gone.) Across a sharp edge a pixel's
+//!   neighbours see its variance too, which counts it up to 1.5 times over; detail finer than
+//!   a pixel with no edge is counted once.
 //!
 //! Photon splats are accumulated per worker without locks and merged after the pass; the
 //! merge order is fixed, so a given seed and thread count give the same image, and other
@@ -263,8 +266,6 @@ const MAX_HISTORY: usize = 2048;
 const INNER_RADIUS_RATIO: f64 = 0.5;
 /// c in b = c (L_R - L_{R/2}): the geometric mean of 4/3 (smooth radiance) and 2.08 (a step).
 const BIAS_FACTOR: f64 = 1.665;
-/// How many times PPM's footprint estimate counts an edge pixel's variance (module docs).
-const EDGE_DOUBLE_COUNT: f64 = 1.5;
 
 impl PhotonMapper {
     pub fn new(ctx: RenderContext, variant: Variant, settings: PhotonMappingSettings) -> Self {
@@ -583,6 +584,16 @@ impl PhotonMapper {
             .map(|i| self.indirect(i))
             .collect();
         let noise: Vec<DVec3> = pixels.iter().map(|p| p.variance).collect();
+        // The pixel's converged value is the mean over its footprint, which its neighbours
+        // sample too: the footprint error is relative to the neighbourhood's mean, not to the
+        // pixel's own value, which misses a bright feature thinner than a pixel whenever its
+        // hit point does (measured on the door, whose lit gap is a pixel wide: dividing by the
+        // pixel's own r^2 overestimated the relMSE 49 times).
+        let n = self.passes.max(1) as f64;
+        let values: Vec<DVec3> = (0..self.pixels.len())
+            .map(|i| self.pixels[i].direct_sum / n + indirect[i])
+            .collect();
+        let footprint_mean = error_estimate::box_filter_3x3(&values, w, h);
         pixels
             .par_chunks_mut(w.max(1))
             .enumerate()
@@ -599,8 +610,12 @@ impl PhotonMapper {
                         count += 1.0;
                     }
                     if count > 0.0 {
-                        pixel.variance +=
-                            (sum / (1.5 * count * EDGE_DOUBLE_COUNT)).max(DVec3::ZERO);
+                        let variance = (sum / (1.5 * count)).max(DVec3::ZERO);
+                        // Expressed over the pixel's own denominator, as the film's variance is.
+                        let own = pixel.reference_sq + error_estimate::REL_MSE_EPSILON;
+                        let mean_sq = footprint_mean[i] * footprint_mean[i];
+                        let footprint = mean_sq + error_estimate::REL_MSE_EPSILON;
+                        pixel.variance += variance * own / footprint;
                     }
                 }
             });
