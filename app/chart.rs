@@ -25,7 +25,9 @@ fn register_font() {
 fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) = values
         .filter(|v| v.is_finite() && *v > 0.0)
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
     (hi > 0.0).then(|| (lo / 1.5, hi * 1.5))
 }
 
@@ -38,10 +40,9 @@ pub fn draw_convergence(
     register_font();
     let records = || runs.iter().flatten();
     let (t0, t1) = log_range(records().map(|r| r.seconds)).ok_or("no records to plot")?;
-    let (e0, e1) = log_range(
-        records().flat_map(|r| [r.rel_mse, r.estimated_rel_mse].into_iter().flatten()),
-    )
-    .ok_or("no errors to plot")?;
+    let (e0, e1) =
+        log_range(records().flat_map(|r| [r.rel_mse, r.estimated_rel_mse].into_iter().flatten()))
+            .ok_or("no errors to plot")?;
     let mut buffer = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buffer, SIZE).into_drawing_area();

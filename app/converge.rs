@@ -374,7 +374,9 @@ pub fn run(args: &ConvergeArgs) -> Result<(), crate::render::Failure> {
     for (i, spec) in specs.iter().enumerate() {
         bar.set_message(format!("{} ({}/{})", spec.label(), i + 1, specs.len()));
         let done_before = args.time * i as f64;
-        let records = measure(&m, spec, &|t| bar.set_position(((done_before + t) * 10.0) as u64))?;
+        let records = measure(&m, spec, &|t| {
+            bar.set_position(((done_before + t) * 10.0) as u64)
+        })?;
         all.push(records);
     }
     bar.finish_and_clear();
@@ -492,9 +494,15 @@ mod tests {
         let c = checkpoints(60.0, 3);
         // 60 s down by thirds of a decade to the last one above 0.1 s: 60 10^(-8/3).
         assert_eq!(c.len(), 9);
-        assert!((c[0] - 60.0 * 10f64.powf(-8.0 / 3.0)).abs() < 1e-12, "{c:?}");
+        assert!(
+            (c[0] - 60.0 * 10f64.powf(-8.0 / 3.0)).abs() < 1e-12,
+            "{c:?}"
+        );
         assert!((c.last().unwrap() - 60.0).abs() < 1e-9);
-        assert!(c.windows(2).all(|w| (w[1] / w[0] - 10f64.powf(1.0 / 3.0)).abs() < 1e-9));
+        assert!(
+            c.windows(2)
+                .all(|w| (w[1] / w[0] - 10f64.powf(1.0 / 3.0)).abs() < 1e-9)
+        );
         assert!((checkpoints(2.0, 1)[0] - 0.02).abs() < 1e-12);
     }
 
@@ -511,7 +519,10 @@ mod tests {
             estimated_rel_mse: None,
             estimated_bias_rel_mse: None,
         };
-        let a: Vec<Record> = [1.0, 10.0, 100.0].iter().map(|t| rec("a", *t, 1.0 / t)).collect();
+        let a: Vec<Record> = [1.0, 10.0, 100.0]
+            .iter()
+            .map(|t| rec("a", *t, 1.0 / t))
+            .collect();
         let b: Vec<Record> = [1.0, 10.0, 100.0]
             .iter()
             .map(|t| rec("b", *t, 0.1 / t.sqrt()))

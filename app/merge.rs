@@ -85,10 +85,9 @@ pub fn run(args: &MergeArgs) -> Result<(), crate::render::Failure> {
     let mut seeds: Vec<&str> = Vec::new();
     for r in &runs {
         let seed = r.metadata.get("seed").map_or("", String::as_str);
-        if let Some(other) = runs
-            .iter()
-            .find(|o| !std::ptr::eq(*o, r) && o.metadata.get("seed").map(String::as_str) == Some(seed))
-        {
+        if let Some(other) = runs.iter().find(|o| {
+            !std::ptr::eq(*o, r) && o.metadata.get("seed").map(String::as_str) == Some(seed)
+        }) {
             return Err(Failure::Usage(format!(
                 "{} and {} have the same seed {seed}: they hold the same samples, not independent ones (render each with its own --seed)",
                 r.path.display(),
@@ -108,9 +107,8 @@ pub fn run(args: &MergeArgs) -> Result<(), crate::render::Failure> {
         *p = (sum / total).as_vec3();
     }
 
-    let sum_of = |key: &str| -> Option<f64> {
-        runs.iter().map(|r| number(r, key)).sum::<Option<f64>>()
-    };
+    let sum_of =
+        |key: &str| -> Option<f64> { runs.iter().map(|r| number(r, key)).sum::<Option<f64>>() };
     let mut metadata = BTreeMap::new();
     for key in ["integrator", "parameters", "scene"] {
         if let Some(v) = first.metadata.get(key) {

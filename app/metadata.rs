@@ -40,7 +40,10 @@ pub fn exr_metadata(run: &RunDescription, frame: &Frame) -> BTreeMap<String, Str
     ]);
     if let Some(e) = frame.error.as_ref() {
         m.insert("estimated_relmse".into(), format!("{:e}", e.rel_mse));
-        m.insert("estimated_bias_relmse".into(), format!("{:e}", e.bias_rel_mse));
+        m.insert(
+            "estimated_bias_relmse".into(),
+            format!("{:e}", e.bias_rel_mse),
+        );
     }
     m
 }

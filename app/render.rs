@@ -1,8 +1,8 @@
 //! `caustica render`: one progressive session, a progress bar on stderr, then the image.
 
 use anyhow::{Context, anyhow};
-use caustica_renderer::image::{write_exr, write_png};
 use caustica::metadata::{RunDescription, exr_metadata};
+use caustica_renderer::image::{write_exr, write_png};
 use caustica_renderer::integrators::{self, ParamValues};
 use caustica_renderer::scene::gltf;
 use caustica_renderer::session::{Session, SessionConfig};
@@ -259,11 +259,9 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         let frame = session.frame();
         bar.set_position(frame.passes);
         let secs = frame.elapsed.as_secs_f64().max(1e-9);
-        let error = frame
-            .error
-            .as_ref()
-            .as_ref()
-            .map_or(String::new(), |e| format!("  est. relMSE {:.3e}", e.rel_mse));
+        let error = frame.error.as_ref().as_ref().map_or(String::new(), |e| {
+            format!("  est. relMSE {:.3e}", e.rel_mse)
+        });
         bar.set_message(format!(
             "{:.2} Mrays/s{error}",
             frame.rays as f64 / secs / 1e6

@@ -288,7 +288,9 @@ fn the_estimated_error_is_shown_as_a_number_a_line_and_a_heat_map() {
     assert_eq!(h.query_all_by_label("estimated relMSE").count(), 2);
     let estimated = h.state().convergence.estimated.clone();
     assert!(
-        estimated.iter().all(|p| p[0] > 0.0 && p[1].is_finite() && p[1] > 0.0),
+        estimated
+            .iter()
+            .all(|p| p[0] > 0.0 && p[1].is_finite() && p[1] > 0.0),
         "{estimated:?}"
     );
     assert!(

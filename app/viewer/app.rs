@@ -2,6 +2,7 @@
 //! and loading in the background (`controller`), panels that return commands which `apply`
 //! carries out. The UI thread never waits for the renderer.
 
+use crate::metadata::{RunDescription, exr_metadata};
 use crate::viewer::controller::{ControllerEvent, ParamEffect, RenderController};
 use crate::viewer::convergence::Convergence;
 use crate::viewer::error_map::ErrorMap;
@@ -11,7 +12,6 @@ use crate::viewer::settings::{STORAGE_KEY, ViewerSettings};
 use crate::viewer::tonemap;
 use crate::viewer::viewport::{HoveredPixel, Viewport};
 use caustica_renderer::image::{ToneCurve, write_exr, write_png_tone_mapped};
-use crate::metadata::{RunDescription, exr_metadata};
 use caustica_renderer::integrators;
 use eframe::egui::{self, Key, KeyboardShortcut, Modifiers};
 use std::path::{Path, PathBuf};
@@ -188,7 +188,11 @@ impl ViewerApp {
                     .open_scene(path, self.settings.width, self.settings.height)
             }
             Command::UseRecommended => {
-                let Some(r) = self.controller.scene.as_ref().map(|s| s.recommendation.clone())
+                let Some(r) = self
+                    .controller
+                    .scene
+                    .as_ref()
+                    .map(|s| s.recommendation.clone())
                 else {
                     return;
                 };

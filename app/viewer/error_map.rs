@@ -36,7 +36,11 @@ pub struct ErrorMap {
 impl ErrorMap {
     /// Makes the texture show `estimate` if it is new and the last update is old enough.
     pub fn update(&mut self, ctx: &egui::Context, estimate: &Arc<Option<ErrorEstimate>>) {
-        if self.shown.as_ref().is_some_and(|s| Arc::ptr_eq(s, estimate)) {
+        if self
+            .shown
+            .as_ref()
+            .is_some_and(|s| Arc::ptr_eq(s, estimate))
+        {
             return;
         }
         if self.updated.is_some_and(|t| t.elapsed() < MIN_INTERVAL) {
@@ -51,9 +55,7 @@ impl ErrorMap {
         // Nearest texels, as for the image: a pixel's error belongs to that pixel.
         match &mut self.texture {
             Some(t) if t.size() == [e.width, e.height] => t.set(image, TextureOptions::NEAREST),
-            _ => {
-                self.texture = Some(ctx.load_texture("error map", image, TextureOptions::NEAREST))
-            }
+            _ => self.texture = Some(ctx.load_texture("error map", image, TextureOptions::NEAREST)),
         }
         self.shown = Some(estimate.clone());
         self.updated = Some(Instant::now());
@@ -61,7 +63,11 @@ impl ErrorMap {
 
     /// Whether the texture shows `estimate` (tests wait for it).
     pub fn shows(&self, estimate: &Arc<Option<ErrorEstimate>>) -> bool {
-        self.texture.is_some() && self.shown.as_ref().is_some_and(|s| Arc::ptr_eq(s, estimate))
+        self.texture.is_some()
+            && self
+                .shown
+                .as_ref()
+                .is_some_and(|s| Arc::ptr_eq(s, estimate))
     }
 
     pub fn texture(&self) -> Option<egui::TextureId> {

@@ -316,11 +316,14 @@ mod tests {
     fn the_median_network_agrees_with_sorting() {
         let mut state = 12345u64;
         let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (state >> 33) as f64 / (1u64 << 31) as f64
         };
         for _ in 0..2000 {
-            let p: [DVec3; 9] = std::array::from_fn(|_| DVec3::new(next(), next(), (next() * 4.0).floor()));
+            let p: [DVec3; 9] =
+                std::array::from_fn(|_| DVec3::new(next(), next(), (next() * 4.0).floor()));
             let m = median_of_9(p);
             for c in 0..3 {
                 let mut v: Vec<f64> = p.iter().map(|x| x[c]).collect();

@@ -199,8 +199,7 @@ pub fn survey_view(
                 lit += usize::from(seen);
                 break;
             }
-            let Some(next) = scatter(&si, &bsdf, wo, &mut sampler, TransportMode::Radiance)
-            else {
+            let Some(next) = scatter(&si, &bsdf, wo, &mut sampler, TransportMode::Radiance) else {
                 break;
             };
             ray = next.ray;
@@ -377,7 +376,10 @@ mod tests {
     #[test]
     fn the_bundled_scenes_get_the_estimators_their_transport_needs() {
         let glass = survey_of(cornell_box(true));
-        assert!(glass.caustic_flux > 0.0 && glass.seen_through_specular > 0.01, "{glass:?}");
+        assert!(
+            glass.caustic_flux > 0.0 && glass.seen_through_specular > 0.01,
+            "{glass:?}"
+        );
         let plain = survey_of(cornell_box(false));
         assert_eq!(plain.caustic_flux, 0.0, "{plain:?}");
         assert_eq!(plain.seen_through_specular, 0.0);
@@ -413,7 +415,10 @@ mod tests {
             intensity: Vec3::splat(10.0),
         });
         let s = survey_of(desc);
-        assert!(s.delta_light_power > 0.99 && s.delta_caustic_flux > 0.3, "{s:?}");
+        assert!(
+            s.delta_light_power > 0.99 && s.delta_caustic_flux > 0.3,
+            "{s:?}"
+        );
         let r = s.recommend(64, 64, 0.7);
         assert_eq!(r.integrator, "sppm");
         let ruled_out: Vec<&str> = r.cannot_converge.iter().map(|c| c.0).collect();

@@ -73,11 +73,8 @@ fn unbiased_estimators_converge_like_one_over_n() {
         let slopes: Vec<f64> = (1..=4u64)
             .map(|seed| {
                 let errors = rel_mse_at(&scene, integrator, params, seed, checkpoints);
-                let points: Vec<(f64, f64)> = checkpoints
-                    .iter()
-                    .map(|&n| n as f64)
-                    .zip(errors)
-                    .collect();
+                let points: Vec<(f64, f64)> =
+                    checkpoints.iter().map(|&n| n as f64).zip(errors).collect();
                 log_log_slope(&points)
             })
             .collect();
@@ -85,7 +82,10 @@ fn unbiased_estimators_converge_like_one_over_n() {
         let mean = slopes.iter().sum::<f64>() / k;
         let sd = (slopes.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt();
         let tolerance = 4.0 * sd / k.sqrt() + allowance;
-        eprintln!("{integrator}: slopes {slopes:.3?}, mean {mean:.3} +- {:.3}", sd / k.sqrt());
+        eprintln!(
+            "{integrator}: slopes {slopes:.3?}, mean {mean:.3} +- {:.3}",
+            sd / k.sqrt()
+        );
         assert!(
             (mean + 1.0).abs() < tolerance.max(0.02),
             "{integrator}: slope {mean}, expected -1 within {tolerance}"
@@ -187,4 +187,3 @@ fn mean_squared_error_falls_like_n_to_the_minus_alpha_and_radius_squared_like_n_
         }
     }
 }
-

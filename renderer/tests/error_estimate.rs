@@ -90,9 +90,9 @@ fn track(
         for pass in 0..last {
             renderer.render_pass(pass, &cancel).unwrap();
             if let Some(c) = out.iter_mut().find(|c| c.passes == pass + 1) {
-                let estimate = renderer
-                    .error_estimate()
-                    .unwrap_or_else(|| panic!("{integrator}: no estimate after {} passes", pass + 1));
+                let estimate = renderer.error_estimate().unwrap_or_else(|| {
+                    panic!("{integrator}: no estimate after {} passes", pass + 1)
+                });
                 let truth = compare(&renderer.image(), reference).unwrap().rel_mse;
                 c.estimated += estimate.rel_mse / seeds.len() as f64;
                 c.bias += estimate.bias_rel_mse / seeds.len() as f64;
@@ -264,4 +264,3 @@ fn on_the_door_the_unbiased_estimates_track_the_true_error() {
         check("door", integrator, &c);
     }
 }
-

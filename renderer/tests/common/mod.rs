@@ -133,7 +133,11 @@ impl MirroredLight {
 impl MirroredLight {
     /// The exact image: each pixel's radiance (direct and through the mirror) averaged over
     /// `n` x `n` points of the pixel (the radiance is smooth, so 4 x 4 is exact to 1e-5).
-    pub fn reference_image(&self, camera: &caustica_renderer::camera::PerspectiveCamera, n: u32) -> Image {
+    pub fn reference_image(
+        &self,
+        camera: &caustica_renderer::camera::PerspectiveCamera,
+        n: u32,
+    ) -> Image {
         let (w, h) = (camera.width, camera.height);
         let pixels = (0..w * h)
             .map(|i| {
