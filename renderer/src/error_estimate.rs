@@ -120,14 +120,16 @@ pub fn variance_of_mean(sum: DVec3, sum_sq: DVec3, n: u64) -> DVec3 {
 ///
 /// Per channel, r = min(x, max(m, m3, x3)): x the mean of the parts (the image), m their
 /// lower median (the minimum of two), m3 the lower median of the parts averaged over the
-/// pixel's 3 x 3 neighbourhood, x3 the median of x over that neighbourhood. Each term answers
-/// one way a plug-in r fails:
-/// - a firefly or a lingering Markov chain lands in one part and one pixel only, so m, m3 and
-///   x3 all stay near r where x is far above it (x^2 would hide the very error the outlier
-///   causes);
+/// pixel's 3 x 3 neighbourhood, x3 the lower median of the parts' medians over that
+/// neighbourhood. Each term answers one way a plug-in r fails:
+/// - a firefly or a lingering Markov chain lands in one part, so m, m3 and x3 all stay near
+///   r where x is far above it (x^2 would hide the very error the outlier causes). A chain
+///   lingers over a patch wider than the neighbourhood, so the median over the neighbourhood
+///   is taken within each part, not of x: the median of x took such a patch for the signal,
+///   and the estimate on the caustic pool for a third of MMLT's true error;
 /// - early on every part is noisy, and the minimum of noisy parts falls below r (with two
-///   passes, far below): the neighbourhood's median x3 is three times less noisy and unbiased
-///   where the image is locally flat;
+///   passes, far below): the neighbourhood's median in each part is three times less noisy
+///   and unbiased where the image is locally flat;
 /// - where the signal itself is rare (a pixel that sees a light through glass in a few passes
 ///   only; Metropolis chains, early, with no sample yet at most pixels of a part) m and x3 are
 ///   near zero and would make the error look a hundred times larger than it is; the
@@ -148,7 +150,10 @@ pub fn robust_reference_sq(parts: &[Vec<DVec3>], width: usize, height: usize) ->
         .into_par_iter()
         .map(|i| parts.iter().map(|p| p[i].max(DVec3::ZERO)).sum::<DVec3>() / parts.len() as f64)
         .collect();
-    let median = median_filter_3x3(&mean, width, height);
+    let medians: Vec<Vec<DVec3>> = parts
+        .iter()
+        .map(|part| median_filter_3x3(part, width, height))
+        .collect();
     let rank = (parts.len() - 1) / 2;
     let lower_median = |parts: &[Vec<DVec3>], i: usize, c: usize| {
         // Few parts (two halves, four groups): on the stack, sorted by insertion.
@@ -170,7 +175,7 @@ pub fn robust_reference_sq(parts: &[Vec<DVec3>], width: usize, height: usize) ->
             let channel = |c: usize| {
                 let robust = lower_median(parts, i, c)
                     .max(lower_median(&smoothed, i, c))
-                    .max(median[i][c]);
+                    .max(lower_median(&medians, i, c));
                 mean[i][c].min(robust)
             };
             let r = DVec3::new(channel(0), channel(1), channel(2));
@@ -351,16 +356,21 @@ mod tests {
             })
             .collect();
         assert!((robust_reference_sq(&parts, 3, 3)[4].x - 4.0).abs() < 1e-9);
+        // A chain lingering over a whole 3 x 3 patch of one group of four: its neighbourhood
+        // median is the patch, the other groups' are not.
+        let parts: Vec<Vec<DVec3>> = [50.0, 1.0, 1.0, 1.0].iter().map(|v| flat(*v)).collect();
+        assert!((robust_reference_sq(&parts, 3, 3)[4].x - 1.0).abs() < 1e-9);
         // Sparse parts with samples at alternate pixels: each part's own value is 0 at half the
         // pixels, but the neighbourhoods stand in (about the centre, one part holds five
-        // samples of 1.8, mean 1, the other four, mean 0.8; every x is 0.9).
+        // samples of 1.8, mean 1, the other four, mean 0.8; the parts' medians are 1.8 and 0,
+        // so r is the lower mean, 0.8, where every x is 0.9).
         let sparse = |offset: usize| -> Vec<DVec3> {
             (0..9)
                 .map(|i| DVec3::splat(if (i + offset) % 2 == 0 { 1.8 } else { 0.0 }))
                 .collect()
         };
         let r = robust_reference_sq(&[sparse(0), sparse(1)], 3, 3);
-        assert!((r[4].x - 0.81).abs() < 1e-9, "{}", r[4]);
+        assert!((r[4].x - 0.64).abs() < 1e-9, "{}", r[4]);
         // A dark column beside a bright one: the dark pixels keep their own value.
         let edge: Vec<DVec3> = (0..9)
             .map(|i| DVec3::splat(if i % 3 == 2 { 100.0 } else { 0.1 }))

@@ -42,7 +42,9 @@
 //!   corrected by its own variance of the mean, b^2 = mean(b)^2 - Var(mean(b)), or noise would
 //!   pass for bias; only the sum over the image is clamped at zero (a clamp per pixel would
 //!   keep the noise's positive half: measured, it doubled the estimate on a scene without any
-//!   bias).
+//!   bias). Where b stands out of its noise it is clamped at x: radiance is not negative, so
+//!   E[x] = r + bias bounds it, while Richardson's estimate reaches 1.665 L_R where only the
+//!   outer disc reaches a bright region.
 //! - PPM gathers at one hit point per pixel for the whole run, so its photon part converges to
 //!   the radiance at that point, not to the pixel's mean: an error whose expected square is the
 //!   variance of the indirect radiance over the pixel's footprint. It is estimated from the
@@ -78,7 +80,7 @@ use crate::integrators::{
 use crate::light::emission::emit_photon;
 use crate::material::TransportMode;
 use crate::sampling::sampler::Sampler;
-use glam::{DVec3, Vec2, Vec3};
+use glam::{BVec3, DVec3, Vec2, Vec3};
 use hash_grid::HashGrid;
 use hit_points::{HitPoint, trace_eye_path};
 use rayon::prelude::*;
@@ -262,6 +264,27 @@ const MAX_HISTORY: usize = 2048;
 const INNER_RADIUS_RATIO: f64 = 0.5;
 /// c in b = c (L_R - L_{R/2}): the geometric mean of 4/3 (smooth radiance) and 2.08 (a step).
 const BIAS_FACTOR: f64 = 1.665;
+
+/// A pixel's kernel-bias estimate counts as its own, rather than noise, when its square
+/// exceeds this many times its variance of the mean (three standard deviations), and the
+/// variance comes from at least `SIGNIFICANT_PASSES` passes: from fewer, it is itself too
+/// noisy (with two passes a third of pure noise stands two of its standard deviations out).
+const SIGNIFICANT_BIAS: f64 = 9.0;
+const SIGNIFICANT_PASSES: u64 = 8;
+
+/// The pixel's kernel-bias estimate, per channel at most its value x where it stands above
+/// its noise (and which channels do): the radiance is not negative, so E[x] = r + bias
+/// bounds the bias. Richardson's estimate exceeds it where the inner disc misses a bright
+/// region the outer one reaches (a hit point beside a lit gap: 1.665 L_R for a bias of at
+/// most L_R). Where the estimate is noise, clamping it would keep only its negative half, and
+/// it is left as it is.
+fn significant_bias(bias: DVec3, variance: DVec3, x: DVec3, passes: u64) -> (DVec3, BVec3) {
+    let significant = BVec3::from_array(std::array::from_fn(|c| {
+        passes >= SIGNIFICANT_PASSES && bias[c] * bias[c] > SIGNIFICANT_BIAS * variance[c]
+    }));
+    let clamped = DVec3::select(significant, bias.min(x.max(DVec3::ZERO)), bias);
+    (clamped, significant)
+}
 
 impl PhotonMapper {
     pub fn new(ctx: RenderContext, variant: Variant, settings: PhotonMappingSettings) -> Self {
@@ -733,36 +756,44 @@ impl Integrator for PhotonMapper {
         let (w, h) = (image.width, image.height);
         let robust = error_estimate::robust_reference_sq(&[odd, even], w, h);
         // The kernel bias lifts x on the dark side of every edge, just where the squared bias
-        // is largest relative to r^2: r is taken below x by the bias estimate there (averaged
-        // over the neighbourhood, as the estimate itself is three times noisier than x).
-        let bias: Vec<DVec3> = self
+        // is largest relative to r^2: r is taken below x by the bias estimate there, the
+        // pixel's own where it stands out of its noise, else the neighbourhood's mean (the
+        // estimate is three times noisier than x). The own one matters where a bias is the
+        // pixel's alone: a fixed PPM hit point beside the door's lit gap reads several times
+        // its converged value for the whole run, and the neighbourhood's mean, a ninth of
+        // it, left the estimate at a sixth of the true relMSE.
+        let own_bias: Vec<(DVec3, DVec3, BVec3)> = self
             .pixels
             .par_iter()
-            .map(|p| p.bias_sum / n as f64)
+            .zip(&image.pixels)
+            .map(|(p, x)| {
+                let variance = error_estimate::variance_of_mean(p.bias_sum, p.bias_sum_sq, n);
+                let (bias, significant) =
+                    significant_bias(p.bias_sum / n as f64, variance, x.as_dvec3(), n);
+                (bias, variance, significant)
+            })
             .collect();
-        let bias = error_estimate::box_filter_3x3(&bias, w, h);
+        let smoothed_bias: Vec<DVec3> = own_bias.iter().map(|b| b.0).collect();
+        let smoothed_bias = error_estimate::box_filter_3x3(&smoothed_bias, w, h);
         let reference_sq: Vec<DVec3> = (0..self.pixels.len())
             .into_par_iter()
             .map(|i| {
-                let r = robust[i]
-                    .to_array()
-                    .map(f64::sqrt)
-                    .into_iter()
-                    .zip((image.pixels[i].as_dvec3() - bias[i]).to_array())
-                    .map(|(r, corrected)| r.min(corrected.max(0.0)))
-                    .collect::<Vec<f64>>();
-                DVec3::new(r[0] * r[0], r[1] * r[1], r[2] * r[2])
+                // A bias well above its noise is the pixel's own (PPM's fixed hit point beside
+                // a bright region); below it, the neighbourhood's is less noisy.
+                let (own, _, significant) = own_bias[i];
+                let bias = DVec3::select(significant, own, smoothed_bias[i]);
+                let corrected = (image.pixels[i].as_dvec3() - bias).max(DVec3::ZERO);
+                let r = robust[i].map(f64::sqrt).min(corrected);
+                r * r
             })
             .collect();
         let mut pixels: Vec<PixelError> = self
             .pixels
             .par_iter()
             .zip(reference_sq.into_par_iter())
-            .map(|(px, reference_sq)| {
-                let bias = px.bias_sum / n as f64;
-                let bias_variance =
-                    error_estimate::variance_of_mean(px.bias_sum, px.bias_sum_sq, n);
-                PixelError {
+            .zip(&own_bias)
+            .map(
+                |((px, reference_sq), &(bias, bias_variance, _))| PixelError {
                     variance: error_estimate::variance_of_mean(
                         px.estimate_sum,
                         px.estimate_sum_sq,
@@ -770,8 +801,8 @@ impl Integrator for PhotonMapper {
                     ),
                     bias_sq: bias * bias - bias_variance,
                     reference_sq,
-                }
-            })
+                },
+            )
             .collect();
         if self.variant == Variant::Ppm {
             self.add_footprint_variance(&mut pixels);
@@ -825,5 +856,25 @@ impl Integrator for PhotonMapper {
                     .collect(),
             },
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_significant_bias_is_bounded_by_the_value_and_noise_is_left_alone() {
+        let x = DVec3::new(4.0, 4.0, 0.1);
+        // Red: 7 +- 0.3, clamped at x; green: 7 +- 10, noise, kept; blue: -2 +- 0.1, a
+        // negative bias (the bright side of an edge), which the value does not bound.
+        let bias = DVec3::new(7.0, 7.0, -2.0);
+        let variance = DVec3::new(0.09, 100.0, 0.01);
+        assert_eq!(
+            significant_bias(bias, variance, x, 8),
+            (DVec3::new(4.0, 7.0, -2.0), BVec3::new(true, false, true))
+        );
+        // From too few passes nothing is significant.
+        assert_eq!(significant_bias(bias, variance, x, 4), (bias, BVec3::FALSE));
     }
 }
