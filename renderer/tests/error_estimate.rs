@@ -128,6 +128,28 @@ fn check(what: &str, integrator: &str, checkpoints: &[Checkpoint]) {
     }
 }
 
+/// One integrator's parameters and checkpoints (pass counts).
+type Run<'a> = (&'a str, &'a [(&'a str, f64)], &'a [u64]);
+
+/// Tracks and checks every run on a bundled scene against a reference whose own estimated
+/// error `reference_error` must stay below a tenth of every error it is compared with.
+fn check_bundled(
+    what: &str,
+    scene: &Arc<Scene>,
+    runs: &[Run],
+    reference: &Image,
+    reference_error: f64,
+) {
+    for &(integrator, params, checkpoints) in runs {
+        let c = track(scene, integrator, params, checkpoints, reference);
+        assert!(
+            c.iter().all(|c| c.truth > 10.0 * reference_error),
+            "the reference is good enough"
+        );
+        check(what, integrator, &c);
+    }
+}
+
 fn reference_by(
     scene: &Arc<Scene>,
     integrator: &str,
@@ -245,7 +267,7 @@ fn on_cornell_glass_every_estimate_tracks_the_true_error() {
     let (reference, reference_error) = reference_by(&scene, "pt", &[], (40, 40), 4096);
     eprintln!("cornell-glass reference: estimated relMSE {reference_error:.2e}");
     let photons = [("photons", 20_000.0)];
-    let runs: [(&str, &[(&str, f64)], &[u64]); 6] = [
+    let runs: [Run; 6] = [
         ("pt", &[], &[4, 16, 64, 256]),
         ("bdpt", &[], &[4, 16, 64]),
         ("mmlt", &[("bootstrap", 10_000.0)], &[4, 16, 64, 256]),
@@ -253,14 +275,7 @@ fn on_cornell_glass_every_estimate_tracks_the_true_error() {
         ("pppm", &photons, &[8, 16, 64]),
         ("ppm", &photons, &[8, 16, 64]),
     ];
-    for (integrator, params, checkpoints) in runs {
-        let c = track(&scene, integrator, params, checkpoints, &reference);
-        assert!(
-            c.iter().all(|c| c.truth > 10.0 * reference_error),
-            "the reference is good enough"
-        );
-        check("cornell-glass", integrator, &c);
-    }
+    check_bundled("cornell-glass", &scene, &runs, &reference, reference_error);
 }
 
 /// The door scene, lit through a slit (max depth 10 for all, against 2048 passes of bdpt): the
@@ -274,7 +289,7 @@ fn on_the_door_every_estimate_tracks_the_true_error() {
     let (reference, reference_error) = reference_by(&scene, "bdpt", &depth, (32, 32), 2048);
     eprintln!("door reference: estimated relMSE {reference_error:.2e}");
     let photons = [("max_depth", 10.0), ("photons", 20_000.0)];
-    let runs: [(&str, &[(&str, f64)], &[u64]); 6] = [
+    let runs: [Run; 6] = [
         ("pt", &depth, &[16, 64, 256]),
         ("bdpt", &depth, &[4, 16, 64]),
         (
@@ -286,14 +301,7 @@ fn on_the_door_every_estimate_tracks_the_true_error() {
         ("pppm", &photons, &[16, 64, 256]),
         ("ppm", &photons, &[16, 64, 256]),
     ];
-    for (integrator, params, checkpoints) in runs {
-        let c = track(&scene, integrator, params, checkpoints, &reference);
-        assert!(
-            c.iter().all(|c| c.truth > 10.0 * reference_error),
-            "the reference is good enough"
-        );
-        check("door", integrator, &c);
-    }
+    check_bundled("door", &scene, &runs, &reference, reference_error);
 }
 
 /// The caustic pool against its shipped reference (SPPM): the light reaches the floor through
@@ -304,7 +312,7 @@ fn on_the_caustic_pool_every_estimate_tracks_the_true_error() {
     let (reference, reference_error) = shipped_reference("caustic-pool");
     eprintln!("caustic-pool reference: estimated relMSE {reference_error:.2e}");
     let photons = [("photons", 20_000.0)];
-    let runs: [(&str, &[(&str, f64)], &[u64]); 6] = [
+    let runs: [Run; 6] = [
         ("pt", &[], &[16, 64, 256]),
         ("bdpt", &[], &[4, 16, 64]),
         ("mmlt", &[("bootstrap", 30_000.0)], &[16, 64, 256]),
@@ -312,12 +320,5 @@ fn on_the_caustic_pool_every_estimate_tracks_the_true_error() {
         ("pppm", &photons, &[8, 16, 64]),
         ("ppm", &photons, &[8, 16, 64]),
     ];
-    for (integrator, params, checkpoints) in runs {
-        let c = track(&scene, integrator, params, checkpoints, &reference);
-        assert!(
-            c.iter().all(|c| c.truth > 10.0 * reference_error),
-            "the reference is good enough"
-        );
-        check("caustic-pool", integrator, &c);
-    }
+    check_bundled("caustic-pool", &scene, &runs, &reference, reference_error);
 }
