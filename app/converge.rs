@@ -10,7 +10,7 @@ use anyhow::{Context, anyhow};
 use caustica_renderer::image::{Image, compare, read_exr};
 use caustica_renderer::integrators::{self, ParamValues};
 use caustica_renderer::scene::{Scene, gltf};
-use caustica_renderer::session::{Frame, Session, SessionConfig};
+use caustica_renderer::session::{Frame, MAX_RESOLUTION, Session, SessionConfig};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -39,10 +39,10 @@ pub struct ConvergeArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Image width [default: the reference's, else 256].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RESOLUTION)))]
     pub width: Option<u32>,
     /// Image height [default: the reference's, else from the width and the camera].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RESOLUTION)))]
     pub height: Option<u32>,
     /// Seed of every run.
     #[arg(long, default_value_t = 0)]

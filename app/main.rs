@@ -8,10 +8,12 @@ mod chart;
 mod converge;
 mod info;
 mod merge;
+mod param_flags;
 mod reference;
 mod render;
 
 use caustica::viewer::{self, Automation, ViewerOptions};
+use caustica_renderer::session::MAX_RESOLUTION;
 use clap::{CommandFactory, Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -32,14 +34,14 @@ struct Cli {
     /// Reference image (EXR) for the viewer's convergence plot.
     #[arg(long)]
     reference: Option<PathBuf>,
-    /// Integrator in the viewer (otherwise the remembered one): pt, ppm, sppm or pppm.
-    #[arg(long)]
+    /// Integrator in the viewer (otherwise the remembered one).
+    #[arg(long, value_parser = render::integrator_names())]
     integrator: Option<String>,
     /// Render width in the viewer (otherwise the remembered one).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RESOLUTION)))]
     width: Option<u32>,
     /// Render height in the viewer (otherwise the remembered one).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RESOLUTION)))]
     height: Option<u32>,
     /// Save a screenshot of the window to this PNG once the render has been shown for
     /// --screenshot-after seconds, then quit (for scripted runs).

@@ -4,6 +4,7 @@
 //! the reference do not find their own bias in it), its remaining error estimated and written
 //! into the header (`caustica:estimated_relmse`), so a user knows how far it can be trusted.
 
+use crate::param_flags::ParamFlags;
 use anyhow::anyhow;
 use caustica_renderer::scene::gltf;
 use caustica_renderer::transport;
@@ -50,7 +51,6 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
     let survey = transport::survey_at(&scene, width, height);
     let r = survey.reference(width, height, scene.camera.yfov);
     eprintln!("reference with {}: {}", r.integrator, r.reasons.join("; "));
-    let param = |name: &str| r.params.get(name).copied();
     let render = RenderArgs {
         scene: args.scene.clone(),
         output: args.output.clone(),
@@ -64,14 +64,9 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
         },
         seed: args.seed,
         threads: args.threads,
-        max_depth: None,
-        alpha: None,
-        radius: param("radius"),
-        photons: param("photons").map(|p| p as u64),
-        large_step: None,
-        sigma: None,
-        bootstrap: None,
-        chains: None,
+        params: ParamFlags {
+            given: r.params.clone(),
+        },
         stats: args.stats.clone(),
         exposure: 0.0,
     };

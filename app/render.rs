@@ -1,11 +1,12 @@
 //! `caustica render`: one progressive session, a progress bar on stderr, then the image.
 
+use crate::param_flags::{ParamFlags, flag_of};
 use anyhow::{Context, anyhow};
 use caustica::metadata::{RunDescription, exr_metadata};
 use caustica_renderer::image::{write_exr, write_png};
-use caustica_renderer::integrators::{self, ParamValues};
+use caustica_renderer::integrators;
 use caustica_renderer::scene::gltf;
-use caustica_renderer::session::{Session, SessionConfig};
+use caustica_renderer::session::{MAX_RESOLUTION, Session, SessionConfig, SessionError};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -19,9 +20,8 @@ pub struct RenderArgs {
     /// Output image: .exr (linear float32 RGB with metadata) or .png (tone-mapped sRGB).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Integrator: pt (path tracer), bdpt (bidirectional), mmlt (multiplexed Metropolis), ppm,
-    /// sppm or pppm (progressive photon mapping).
-    #[arg(long, default_value = "pt")]
+    /// Integrator (`caustica info SCENE` says which one the scene needs).
+    #[arg(long, default_value = "pt", value_parser = integrator_names())]
     pub integrator: String,
     /// Samples per pixel (one per pass); the default when --time is not given is 16.
     #[arg(long, conflicts_with = "time", value_parser = clap::value_parser!(u64).range(1..))]
@@ -41,30 +41,10 @@ pub struct RenderArgs {
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
-    /// Maximum path depth (bounces).
-    #[arg(long)]
-    pub max_depth: Option<u32>,
-    /// Photon mapping: share of new photons kept per pass, in (0, 1] (default 2/3).
-    #[arg(long)]
-    pub alpha: Option<f64>,
-    /// Photon mapping: initial gather radius in scene units (default: four pixel footprints).
-    #[arg(long)]
-    pub radius: Option<f64>,
-    /// Photon mapping: photons per pass (default 100000).
-    #[arg(long)]
-    pub photons: Option<u64>,
-    /// MMLT: probability of a large step, in [0, 1] (default 0.3).
-    #[arg(long)]
-    pub large_step: Option<f64>,
-    /// MMLT: standard deviation of a small step in primary sample space (default 0.01).
-    #[arg(long)]
-    pub sigma: Option<f64>,
-    /// MMLT: bootstrap samples per path length (default 100000).
-    #[arg(long)]
-    pub bootstrap: Option<u64>,
-    /// MMLT: number of Markov chains (default 1000).
-    #[arg(long)]
-    pub chains: Option<u64>,
+    /// Integrator parameters (each integrator reads its own; see `caustica info` for what
+    /// the scene needs).
+    #[command(flatten)]
+    pub params: ParamFlags,
     /// Write the run's statistics as JSON (counters; for MMLT the technique histogram and
     /// acceptance rates per path length).
     #[arg(long, value_name = "FILE.json")]
@@ -72,6 +52,11 @@ pub struct RenderArgs {
     /// Exposure in stops applied to PNG output.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub exposure: f32,
+}
+
+/// The registered integrators' names, as the values an `--integrator` flag accepts.
+pub fn integrator_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(integrators::registry().iter().map(|i| i.name))
 }
 
 pub fn parse_seconds(s: &str) -> Result<f64, String> {
@@ -89,10 +74,10 @@ pub fn parse_seconds(s: &str) -> Result<f64, String> {
 #[derive(Args, Debug, Clone, Copy)]
 pub struct SizeArgs {
     /// Image width in pixels [default: 512, or from --height and the camera's aspect ratio].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RESOLUTION)))]
     pub width: Option<u32>,
     /// Image height in pixels [default: from the width and the camera's aspect ratio, else square].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RESOLUTION)))]
     pub height: Option<u32>,
 }
 
@@ -149,7 +134,7 @@ fn output_format(path: &Path) -> Result<Format, Failure> {
 /// height) when the scene has one, else square; 512 wide when neither is given.
 pub fn output_size(width: Option<u32>, height: Option<u32>, aspect: Option<f32>) -> (u32, u32) {
     let aspect = aspect.filter(|a| a.is_finite() && *a > 0.0).unwrap_or(1.0) as f64;
-    let fit = |v: f64| (v.round() as u32).clamp(1, 16384);
+    let fit = |v: f64| (v.round() as u32).clamp(1, MAX_RESOLUTION);
     match (width, height) {
         (Some(w), Some(h)) => (w, h),
         (Some(w), None) => (w, fit(w as f64 / aspect)),
@@ -167,30 +152,6 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             args.integrator,
             known.join(", ")
         ))
-    })?;
-    let mut given = ParamValues::new();
-    let flags = [
-        ("max_depth", args.max_depth.map(f64::from)),
-        ("alpha", args.alpha),
-        ("radius", args.radius),
-        ("photons", args.photons.map(|p| p as f64)),
-        ("large_step", args.large_step),
-        ("sigma", args.sigma),
-        ("bootstrap", args.bootstrap.map(|b| b as f64)),
-        ("chains", args.chains.map(|c| c as f64)),
-    ];
-    for (name, value) in flags {
-        if let Some(v) = value {
-            given.insert(name.into(), v);
-        }
-    }
-    // Each integrator parameter has its flag: max_depth is --max-depth.
-    let params = integrators::resolve_params(info, &given).map_err(|e| {
-        let flag = given
-            .keys()
-            .find(|k| e.starts_with(k.as_str()))
-            .map(|k| k.replace('_', "-"));
-        Failure::Usage(flag.map_or(e.clone(), |f| format!("--{f}: {e}")))
     })?;
     let out_dir = args
         .output
@@ -230,7 +191,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let session = Session::start(SessionConfig {
         scene: scene.clone(),
         integrator: info.name.to_string(),
-        params: params.clone(),
+        params: args.params.given.clone(),
         width,
         height,
         seed: args.seed,
@@ -240,7 +201,20 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         on_frame: None,
         target_rel_mse: args.until_error,
     })
-    .map_err(|e| Failure::Usage(e.to_string()))?;
+    .map_err(|e| match e {
+        // The parameters are checked here, once, against this integrator's ranges.
+        SessionError::InvalidParameter(e) => {
+            let flag = args
+                .params
+                .given
+                .keys()
+                .find(|k| e.starts_with(k.as_str()) || e.contains(&format!("'{k}'")))
+                .map(|k| flag_of(k));
+            Failure::Usage(flag.map_or(e.clone(), |f| format!("{f}: {e}")))
+        }
+        e => Failure::Usage(e.to_string()),
+    })?;
+    let params = session.params().clone();
 
     let bar = match spp {
         Some(n) => ProgressBar::new(n).with_style(

@@ -2,8 +2,7 @@
 //! drive the session, live settings do not restart it and restarting ones do, snapshots save
 //! readable EXRs, and a broken scene shows its error while the old scene keeps rendering.
 
-use caustica::viewer::app::Message;
-use caustica::viewer::{Command, ViewerApp, ViewerOptions};
+use caustica::viewer::{Command, Message, ViewerApp, ViewerOptions};
 use caustica_renderer::image::read_exr;
 use caustica_renderer::session::RunState;
 use eframe::egui;
@@ -575,6 +574,27 @@ fn mmlt_in_the_viewer_with_live_large_step_histogram_and_warning() {
         steps <= frame.samples,
         "the histogram restarted with the session"
     );
+
+    // A value out of range is refused where it would take effect, and the render goes on.
+    h.state_mut().apply(Command::SetParam("chains".into(), 0.0));
+    let state = h.state();
+    assert_eq!(
+        state.controller.sessions_started,
+        sessions + 1,
+        "no restart"
+    );
+    assert_eq!(state.settings.params["chains"], 32.0, "the setting is kept");
+    assert_eq!(state.controller.session().unwrap().params()["chains"], 32.0);
+    let last = state.messages.last().unwrap();
+    assert!(
+        last.is_error && last.text.contains("chains"),
+        "{}",
+        last.text
+    );
+    let passes = frame.passes;
+    step_until(&mut h, "the same session to render on", |a| {
+        a.controller.frame().is_some_and(|f| f.passes > passes)
+    });
 }
 
 /// The side panel says which estimator the scene's light transport needs, and one click

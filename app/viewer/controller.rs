@@ -127,9 +127,8 @@ impl RenderController {
         let Some(loaded) = &self.scene else {
             return Ok(());
         };
-        if let Some(old) = self.session.take() {
-            drop_in_background(old);
-        }
+        // The old session renders on until the new one has started: a start that fails (a
+        // parameter out of range) keeps what the user had.
         let session = Session::start(SessionConfig {
             scene: loaded.scene.clone(),
             integrator: settings.integrator.clone(),
@@ -144,7 +143,9 @@ impl RenderController {
             target_rel_mse: None,
         })
         .map_err(|e| e.to_string())?;
-        self.session = Some(session);
+        if let Some(old) = self.session.replace(session) {
+            drop_in_background(old);
+        }
         self.sessions_started += 1;
         Ok(())
     }
@@ -162,7 +163,7 @@ impl RenderController {
             .iter()
             .find(|p| p.name == name)
             .ok_or_else(|| format!("no parameter {name}"))?;
-        integrators::check_param(spec, value)?;
+        // Checked once, where it takes effect: the session's live change or its restart.
         if spec.live
             && let Some(session) = &mut self.session
         {

@@ -2,16 +2,23 @@
 //! background, shows the image as it converges, and saves snapshots.
 
 pub mod app;
+pub mod automation;
+pub mod command;
 pub mod controller;
 pub mod convergence;
+pub mod dialogs;
 pub mod error_map;
 pub mod panels;
 pub mod plots;
 pub mod settings;
+pub mod snapshot;
+pub mod state;
 pub mod tonemap;
 pub mod viewport;
 
-pub use app::{Automation, Command, ViewerApp, ViewerOptions};
+pub use automation::Automation;
+pub use command::{Command, Message};
+pub use state::{ViewerApp, ViewerOptions};
 
 /// Opens the viewer window and runs until it is closed.
 pub fn run(options: ViewerOptions) -> eframe::Result<()> {

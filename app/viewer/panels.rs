@@ -1,12 +1,12 @@
 //! The side panel. It shows the state it is given and returns the user's actions as
 //! commands; it never calls the renderer (egui's and rerun's separation of UI and work).
 
-use crate::viewer::app::Command;
+use crate::viewer::command::Command;
 use crate::viewer::settings::ViewerSettings;
 use caustica_renderer::image::ToneCurve;
 use caustica_renderer::integrators::{self, ParamSpec};
 use caustica_renderer::scene::SceneInfo;
-use caustica_renderer::session::{Frame, RunState};
+use caustica_renderer::session::{Frame, MAX_RESOLUTION, RunState};
 use caustica_renderer::transport::Recommendation;
 use eframe::egui::{self, RichText};
 use std::path::Path;
@@ -58,6 +58,7 @@ fn param_widget(ui: &mut egui::Ui, spec: &ParamSpec, value: f64, out: &mut Vec<C
     });
 }
 
+/// The side panel: the scene, the render's settings, the display, the statistics.
 pub fn side_panel(
     ui: &mut egui::Ui,
     settings: &ViewerSettings,
@@ -66,196 +67,226 @@ pub fn side_panel(
     let mut out = Vec::new();
     egui::ScrollArea::vertical().show(ui, |ui| {
         ui.heading("Scene");
-        match (status.scene, status.loading) {
-            (_, Some(loading)) => {
-                ui.horizontal(|ui| {
-                    ui.spinner();
-                    ui.label(format!("loading {}", loading.display()));
-                });
-            }
-            (None, None) => {
-                ui.label("No scene: open a .gltf or .glb, or drop one on the window.");
-            }
-            _ => {}
-        }
-        if let Some((path, info)) = status.scene {
-            ui.label(
-                RichText::new(
-                    path.file_name()
-                        .map(|n| n.to_string_lossy())
-                        .unwrap_or_default(),
-                )
-                .strong(),
-            )
-            .on_hover_text(path.display().to_string());
-            ui.label(format!(
-                "{} triangles, {} lights, loaded in {:.0} ms",
-                info.triangles,
-                info.lights,
-                info.load_time.as_secs_f64() * 1e3
-            ));
-            for w in &info.warnings {
-                ui.label(RichText::new(format!("warning: {w}")).small());
-            }
-        }
-        if let Some(r) = status.recommendation {
-            recommendation(ui, settings, r, &mut out);
-        }
-        ui.horizontal(|ui| {
-            if ui.button("Open…").on_hover_text("Ctrl+O").clicked() {
-                out.push(Command::ShowOpenDialog);
-            }
-            if !settings.recent_scenes.is_empty() {
-                ui.menu_button("Recent", |ui| {
-                    for p in &settings.recent_scenes {
-                        if ui.button(p.display().to_string()).clicked() {
-                            out.push(Command::OpenScene(p.clone()));
-                            ui.close();
-                        }
-                    }
-                });
-            }
-        });
-
+        scene_section(ui, settings, status, &mut out);
         ui.separator();
         ui.heading("Render");
-        let mut integrator = settings.integrator.clone();
-        egui::ComboBox::from_label("integrator")
-            .selected_text(&integrator)
-            .show_ui(ui, |ui| {
-                for info in integrators::registry() {
-                    ui.selectable_value(&mut integrator, info.name.to_string(), info.title)
-                        .on_hover_text(info.description);
-                }
-            });
-        if integrator != settings.integrator {
-            out.push(Command::SetIntegrator(integrator));
-        }
-        if let Some(info) = integrators::find(&settings.integrator) {
-            for spec in info.params {
-                let value = settings
-                    .params
-                    .get(spec.name)
-                    .copied()
-                    .unwrap_or(spec.default);
-                param_widget(ui, spec, value, &mut out);
-            }
-        }
-        // What the integrator says of its state (a sticking chain, a black scene).
-        if let Some(f) = status.frame {
-            for m in f.messages.iter() {
-                ui.colored_label(ui.visuals().warn_fg_color, format!("warning: {m}"));
-            }
-        }
-        ui.horizontal(|ui| {
-            let (mut w, mut h) = (settings.width, settings.height);
-            let rw = ui
-                .add(egui::DragValue::new(&mut w).range(1..=8192).suffix(" px"))
-                .on_hover_text("width (restarts)");
-            ui.label("×");
-            let rh = ui
-                .add(egui::DragValue::new(&mut h).range(1..=8192).suffix(" px"))
-                .on_hover_text("height (restarts)");
-            ui.label(RichText::new("restarts").weak());
-            if (commit_value(&rw, false) || commit_value(&rh, false))
-                && (w, h) != (settings.width, settings.height)
-            {
-                out.push(Command::SetResolution(w, h));
-            }
-        });
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let mut threads = settings.threads;
-        let r = ui
-            .add(egui::Slider::new(&mut threads, 0..=cores.max(1) * 2).text("threads"))
-            .on_hover_text("worker threads, 0 for one per core (restarts)");
-        if commit_value(&r, false) && threads != settings.threads {
-            out.push(Command::SetThreads(threads));
-        }
-        let mut seed = settings.seed;
-        let r = ui
-            .add(egui::DragValue::new(&mut seed).prefix("seed "))
-            .on_hover_text("random seed (restarts)");
-        if commit_value(&r, false) && seed != settings.seed {
-            out.push(Command::SetSeed(seed));
-        }
-        ui.horizontal(|ui| {
-            let paused = status.frame.is_some_and(|f| f.state == RunState::Paused);
-            if ui
-                .button(if paused { "Resume" } else { "Pause" })
-                .on_hover_text("Space")
-                .clicked()
-            {
-                out.push(Command::TogglePause);
-            }
-            if ui.button("Restart").on_hover_text("R").clicked() {
-                out.push(Command::Restart);
-            }
-        });
-
+        render_section(ui, settings, status, &mut out);
         ui.separator();
         ui.heading("Display");
-        let mut exposure = settings.exposure;
-        if ui
-            .add(egui::Slider::new(&mut exposure, -10.0..=10.0).text("exposure (EV)"))
-            .changed()
-        {
-            out.push(Command::SetExposure(exposure));
-        }
-        let mut curve = settings.tone_curve;
-        egui::ComboBox::from_label("tone curve")
-            .selected_text(curve.name())
-            .show_ui(ui, |ui| {
-                for c in ToneCurve::ALL {
-                    ui.selectable_value(&mut curve, c, c.name());
-                }
-            });
-        if curve != settings.tone_curve {
-            out.push(Command::SetToneCurve(curve));
-        }
-        ui.horizontal(|ui| {
-            if ui.button("Fit").on_hover_text("F").clicked() {
-                out.push(Command::Fit);
-            }
-            if ui.button("1:1").on_hover_text("1").clicked() {
-                out.push(Command::OneToOne);
-            }
-        });
-        ui.horizontal(|ui| {
-            if ui
-                .button("Save EXR")
-                .on_hover_text("Ctrl+S: the linear estimate with its metadata")
-                .clicked()
-            {
-                out.push(Command::SaveExr);
-            }
-            if ui
-                .button("Save PNG")
-                .on_hover_text("what the window shows: exposure and tone curve applied")
-                .clicked()
-            {
-                out.push(Command::SavePng);
-            }
-        });
-        ui.horizontal(|ui| {
-            if ui.selectable_label(settings.show_plots, "Plots").clicked() {
-                out.push(Command::TogglePlots);
-            }
-            if ui
-                .selectable_label(settings.show_error_map, "Error map")
-                .on_hover_text(
-                    "E: each pixel's estimated remaining error (relMSE) over the image, on a log scale",
-                )
-                .clicked()
-            {
-                out.push(Command::ToggleErrorMap);
-            }
-        });
-
+        display_section(ui, settings, &mut out);
         ui.separator();
         ui.heading("Statistics");
         statistics(ui, status);
     });
     out
+}
+
+/// The scene shown or loading, what its light transport needs, opening another.
+fn scene_section(
+    ui: &mut egui::Ui,
+    settings: &ViewerSettings,
+    status: &PanelStatus,
+    out: &mut Vec<Command>,
+) {
+    match (status.scene, status.loading) {
+        (_, Some(loading)) => {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label(format!("loading {}", loading.display()));
+            });
+        }
+        (None, None) => {
+            ui.label("No scene: open a .gltf or .glb, or drop one on the window.");
+        }
+        _ => {}
+    }
+    if let Some((path, info)) = status.scene {
+        ui.label(
+            RichText::new(
+                path.file_name()
+                    .map(|n| n.to_string_lossy())
+                    .unwrap_or_default(),
+            )
+            .strong(),
+        )
+        .on_hover_text(path.display().to_string());
+        ui.label(format!(
+            "{} triangles, {} lights, loaded in {:.0} ms",
+            info.triangles,
+            info.lights,
+            info.load_time.as_secs_f64() * 1e3
+        ));
+        for w in &info.warnings {
+            ui.label(RichText::new(format!("warning: {w}")).small());
+        }
+    }
+    if let Some(r) = status.recommendation {
+        recommendation(ui, settings, r, out);
+    }
+    ui.horizontal(|ui| {
+        if ui.button("Open…").on_hover_text("Ctrl+O").clicked() {
+            out.push(Command::ShowOpenDialog);
+        }
+        if !settings.recent_scenes.is_empty() {
+            ui.menu_button("Recent", |ui| {
+                for p in &settings.recent_scenes {
+                    if ui.button(p.display().to_string()).clicked() {
+                        out.push(Command::OpenScene(p.clone()));
+                        ui.close();
+                    }
+                }
+            });
+        }
+    });
+}
+
+/// The integrator and its parameters, size, threads, seed; pause and restart.
+fn render_section(
+    ui: &mut egui::Ui,
+    settings: &ViewerSettings,
+    status: &PanelStatus,
+    out: &mut Vec<Command>,
+) {
+    let mut integrator = settings.integrator.clone();
+    egui::ComboBox::from_label("integrator")
+        .selected_text(&integrator)
+        .show_ui(ui, |ui| {
+            for info in integrators::registry() {
+                ui.selectable_value(&mut integrator, info.name.to_string(), info.title)
+                    .on_hover_text(info.description);
+            }
+        });
+    if integrator != settings.integrator {
+        out.push(Command::SetIntegrator(integrator));
+    }
+    if let Some(info) = integrators::find(&settings.integrator) {
+        for spec in info.params {
+            let value = settings
+                .params
+                .get(spec.name)
+                .copied()
+                .unwrap_or(spec.default);
+            param_widget(ui, spec, value, out);
+        }
+    }
+    // What the integrator says of its state (a sticking chain, a black scene).
+    if let Some(f) = status.frame {
+        for m in f.messages.iter() {
+            ui.colored_label(ui.visuals().warn_fg_color, format!("warning: {m}"));
+        }
+    }
+    ui.horizontal(|ui| {
+        let (mut w, mut h) = (settings.width, settings.height);
+        let rw = ui
+            .add(
+                egui::DragValue::new(&mut w)
+                    .range(1..=MAX_RESOLUTION)
+                    .suffix(" px"),
+            )
+            .on_hover_text("width (restarts)");
+        ui.label("×");
+        let rh = ui
+            .add(
+                egui::DragValue::new(&mut h)
+                    .range(1..=MAX_RESOLUTION)
+                    .suffix(" px"),
+            )
+            .on_hover_text("height (restarts)");
+        ui.label(RichText::new("restarts").weak());
+        if (commit_value(&rw, false) || commit_value(&rh, false))
+            && (w, h) != (settings.width, settings.height)
+        {
+            out.push(Command::SetResolution(w, h));
+        }
+    });
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut threads = settings.threads;
+    let r = ui
+        .add(egui::Slider::new(&mut threads, 0..=cores.max(1) * 2).text("threads"))
+        .on_hover_text("worker threads, 0 for one per core (restarts)");
+    if commit_value(&r, false) && threads != settings.threads {
+        out.push(Command::SetThreads(threads));
+    }
+    let mut seed = settings.seed;
+    let r = ui
+        .add(egui::DragValue::new(&mut seed).prefix("seed "))
+        .on_hover_text("random seed (restarts)");
+    if commit_value(&r, false) && seed != settings.seed {
+        out.push(Command::SetSeed(seed));
+    }
+    ui.horizontal(|ui| {
+        let paused = status.frame.is_some_and(|f| f.state == RunState::Paused);
+        if ui
+            .button(if paused { "Resume" } else { "Pause" })
+            .on_hover_text("Space")
+            .clicked()
+        {
+            out.push(Command::TogglePause);
+        }
+        if ui.button("Restart").on_hover_text("R").clicked() {
+            out.push(Command::Restart);
+        }
+    });
+}
+
+/// Exposure and tone curve, the view, saving, and what is drawn.
+fn display_section(ui: &mut egui::Ui, settings: &ViewerSettings, out: &mut Vec<Command>) {
+    let mut exposure = settings.exposure;
+    if ui
+        .add(egui::Slider::new(&mut exposure, -10.0..=10.0).text("exposure (EV)"))
+        .changed()
+    {
+        out.push(Command::SetExposure(exposure));
+    }
+    let mut curve = settings.tone_curve;
+    egui::ComboBox::from_label("tone curve")
+        .selected_text(curve.name())
+        .show_ui(ui, |ui| {
+            for c in ToneCurve::ALL {
+                ui.selectable_value(&mut curve, c, c.name());
+            }
+        });
+    if curve != settings.tone_curve {
+        out.push(Command::SetToneCurve(curve));
+    }
+    ui.horizontal(|ui| {
+        if ui.button("Fit").on_hover_text("F").clicked() {
+            out.push(Command::Fit);
+        }
+        if ui.button("1:1").on_hover_text("1").clicked() {
+            out.push(Command::OneToOne);
+        }
+    });
+    ui.horizontal(|ui| {
+        if ui
+            .button("Save EXR")
+            .on_hover_text("Ctrl+S: the linear estimate with its metadata")
+            .clicked()
+        {
+            out.push(Command::SaveExr);
+        }
+        if ui
+            .button("Save PNG")
+            .on_hover_text("what the window shows: exposure and tone curve applied")
+            .clicked()
+        {
+            out.push(Command::SavePng);
+        }
+    });
+    ui.horizontal(|ui| {
+        if ui.selectable_label(settings.show_plots, "Plots").clicked() {
+            out.push(Command::TogglePlots);
+        }
+        if ui
+            .selectable_label(settings.show_error_map, "Error map")
+            .on_hover_text(
+                "E: each pixel's estimated remaining error (relMSE) over the image, on a log scale",
+            )
+            .clicked()
+        {
+            out.push(Command::ToggleErrorMap);
+        }
+    });
 }
 
 /// What the scene's light transport needs: the recommended estimator (with its reasons on

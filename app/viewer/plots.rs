@@ -2,7 +2,7 @@
 //! always and the true relMSE and RMSE while a reference is loaded. Axes show log10 values;
 //! the tick labels give the plain numbers.
 
-use crate::viewer::app::Command;
+use crate::viewer::command::Command;
 use crate::viewer::convergence::Convergence;
 use caustica_renderer::integrators::{PlotKind, PlotSeries};
 use eframe::egui;

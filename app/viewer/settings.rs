@@ -3,6 +3,7 @@
 
 use caustica_renderer::image::ToneCurve;
 use caustica_renderer::integrators::{self, ParamValues};
+use caustica_renderer::session::MAX_RESOLUTION;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -70,8 +71,8 @@ impl ViewerSettings {
         };
         self.params = integrators::resolve_params(info, &self.params)
             .unwrap_or_else(|_| Self::defaults_of(&self.integrator));
-        self.width = self.width.clamp(1, 16384);
-        self.height = self.height.clamp(1, 16384);
+        self.width = self.width.clamp(1, MAX_RESOLUTION);
+        self.height = self.height.clamp(1, MAX_RESOLUTION);
         if !self.exposure.is_finite() {
             self.exposure = 0.0;
         }

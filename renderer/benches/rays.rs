@@ -11,7 +11,7 @@
 
 use caustica_renderer::camera::PerspectiveCamera;
 use caustica_renderer::geometry::Ray;
-use caustica_renderer::integrators::path::{PathIntegrator, PathSettings};
+use caustica_renderer::integrators::path_tracer::{PathSettings, PathTracer};
 use caustica_renderer::integrators::{Integrator, RenderContext};
 use caustica_renderer::sampling::sampler::Sampler;
 use caustica_renderer::sampling::warp::sample_cosine_hemisphere;
@@ -145,7 +145,7 @@ fn bench_path_tracer(c: &mut Criterion) {
             camera: PerspectiveCamera::new(&scene.camera, size, size),
             seed: 0,
         };
-        Box::new(PathIntegrator::new(ctx, PathSettings::default()))
+        Box::new(PathTracer::new(ctx, PathSettings::default()))
     });
 }
 
@@ -218,8 +218,8 @@ fn bench_photon_mapping(c: &mut Criterion) {
 /// MMLT mutations per second (a pass is one mutation per pixel; door and cornell-glass at
 /// 64 x 64, default parameters: 1000 chains, max depth 10; the bootstrap runs in the warm-up).
 fn bench_bidirectional(c: &mut Criterion) {
-    use caustica_renderer::integrators::bdpt::{BdptIntegrator, BdptSettings};
-    use caustica_renderer::integrators::mmlt::{MmltIntegrator, MmltSettings};
+    use caustica_renderer::integrators::bdpt::{Bdpt, BdptSettings};
+    use caustica_renderer::integrators::mmlt::{Mmlt, MmltSettings};
     let size = 64;
     let glass = scene();
     let door = Arc::new(
@@ -232,7 +232,7 @@ fn bench_bidirectional(c: &mut Criterion) {
         seed: 0,
     };
     bench_passes(c, "bdpt samples", (size * size) as u64, || {
-        Box::new(BdptIntegrator::new(
+        Box::new(Bdpt::new(
             ctx(&glass),
             BdptSettings {
                 max_depth: 64,
@@ -245,7 +245,7 @@ fn bench_bidirectional(c: &mut Criterion) {
             c,
             &format!("mmlt mutations, {name}"),
             (size * size) as u64,
-            || Box::new(MmltIntegrator::new(ctx(scene), MmltSettings::default())),
+            || Box::new(Mmlt::new(ctx(scene), MmltSettings::default())),
         );
     }
 }

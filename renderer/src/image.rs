@@ -1,8 +1,8 @@
 //! Linear RGB images: EXR and PNG output (DESIGN.md section 3), EXR input for references, and
 //! the error metrics every part of the project shares.
 
+use crate::color::linear_to_srgb;
 use crate::geometry::luminance;
-use crate::scene::texture::linear_to_srgb;
 use glam::Vec3;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

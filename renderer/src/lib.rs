@@ -21,6 +21,7 @@
 //!   samples, for every integrator and every frame.
 
 pub mod camera;
+pub mod color;
 pub mod error_estimate;
 pub mod film;
 pub mod geometry;
@@ -32,4 +33,5 @@ pub mod procedural;
 pub mod sampling;
 pub mod scene;
 pub mod session;
+pub mod texture;
 pub mod transport;

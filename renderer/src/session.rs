@@ -17,6 +17,10 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+/// The largest width or height a session renders; the command line and the viewer offer
+/// no more.
+pub const MAX_RESOLUTION: u32 = 16384;
+
 #[derive(Clone)]
 pub struct SessionConfig {
     pub scene: Arc<Scene>,
@@ -64,8 +68,8 @@ pub struct Frame {
     pub statistics: Arc<Option<serde_json::Value>>,
     /// The image's remaining error estimated without a reference (None until the integrator
     /// has enough samples to estimate it). Renewed after every pass where that costs little,
-    /// else as often as it costs a tenth of the time (so it may be a few passes old), and
-    /// always for a run's last frame.
+    /// else as often as it costs a tenth of the time, and at least whenever the passes have
+    /// grown by a tenth (so it may be a few passes old), and always for a run's last frame.
     pub error: Arc<Option<ErrorEstimate>>,
     pub passes: u64,
     pub samples: u64,
@@ -81,7 +85,7 @@ pub enum SessionError {
     UnknownIntegrator(String, String),
     #[error("{0}")]
     InvalidParameter(String),
-    #[error("invalid resolution {0}x{1}: width and height must be 1 to 16384")]
+    #[error("invalid resolution {0}x{1}: width and height must be 1 to {MAX_RESOLUTION}")]
     InvalidResolution(u32, u32),
     #[error("cannot start worker threads: {0}")]
     Threads(String),
@@ -113,7 +117,7 @@ impl Session {
         let params = integrators::resolve_params(info, &config.params)
             .map_err(SessionError::InvalidParameter)?;
         let (w, h) = (config.width, config.height);
-        if !(1..=16384).contains(&w) || !(1..=16384).contains(&h) {
+        if !(1..=MAX_RESOLUTION).contains(&w) || !(1..=MAX_RESOLUTION).contains(&h) {
             return Err(SessionError::InvalidResolution(w, h));
         }
         let threads = if config.threads == 0 {
@@ -214,23 +218,7 @@ impl Session {
 
     /// Changes a parameter that is live for this integrator, from the next pass on.
     pub fn set_live_param(&mut self, name: &str, value: f64) -> Result<(), String> {
-        let spec = self
-            .integrator
-            .params
-            .iter()
-            .find(|p| p.name == name)
-            .ok_or_else(|| {
-                format!(
-                    "integrator '{}' has no parameter '{name}'",
-                    self.integrator.name
-                )
-            })?;
-        if !spec.live {
-            return Err(format!(
-                "{name} cannot change while rendering: restart the session"
-            ));
-        }
-        integrators::check_param(spec, value)?;
+        integrators::check_live_change(self.integrator, name, value)?;
         self.params.insert(name.to_string(), value);
         self.shared
             .live_changes
@@ -285,33 +273,39 @@ impl Estimate {
 
 /// When to estimate the remaining error anew. The estimate reads every pixel's sums a few
 /// times; on a small image whose passes take a millisecond it would slow the render down by
-/// half. So it is renewed only once it has cost at most a tenth of the time since the last
-/// one (every pass where passes are slow), and always for the last frame of a run.
+/// half. So it is renewed once it has cost at most a tenth of the time since the last one
+/// (every pass where passes are slow), or once the passes have grown by a tenth since (the
+/// error falls about like 1 / passes, so the estimate is never more than a tenth stale, and
+/// `--until-error` stops within a tenth of the passes it needed, however a busy machine
+/// stretched one estimate's cost: that costs O(log passes) estimates), and always for the
+/// last frame of a run.
 struct ErrorSchedule {
-    last: Option<Instant>,
+    last: Option<(Instant, u64)>,
     cost: Duration,
 }
 
 impl ErrorSchedule {
-    fn due(&self) -> bool {
-        self.last
-            .is_none_or(|t| t.elapsed() >= self.cost.saturating_mul(10))
+    fn due(&self, passes: u64) -> bool {
+        self.last.is_none_or(|(t, at)| {
+            t.elapsed() >= self.cost.saturating_mul(10) || passes >= at + at.div_ceil(10)
+        })
     }
 
-    /// The estimate for the state after a pass: a new one when due or `last_frame`.
+    /// The estimate for the state after `passes` passes: a new one when due or `last_frame`.
     fn estimate(
         &mut self,
         integrator: &dyn Integrator,
         previous: &Estimate,
+        passes: u64,
         last_frame: bool,
     ) -> Estimate {
-        if !(last_frame || self.due()) {
+        if !(last_frame || self.due(passes)) {
             return Estimate::of(integrator, Some(previous.error.clone()));
         }
         let started = Instant::now();
         let error = Arc::new(integrator.error_estimate());
         self.cost = started.elapsed();
-        self.last = Some(Instant::now());
+        self.last = Some((Instant::now(), passes));
         Estimate::of(integrator, Some(error))
     }
 }
@@ -420,8 +414,8 @@ fn run(
                 // On the session's pool, so that an estimate that uses rayon uses its threads.
                 // (A mutable borrow: the integrator is Send but not Sync.)
                 let (renderer, previous, due) = (&mut integrator, &estimate, &mut schedule);
-                estimate =
-                    pool.install(move || due.estimate(renderer.as_ref(), previous, last_frame));
+                estimate = pool
+                    .install(move || due.estimate(renderer.as_ref(), previous, passes, last_frame));
                 publish(
                     &estimate,
                     passes,

@@ -21,7 +21,7 @@
 
 use crate::camera::PerspectiveCamera;
 use crate::integrators::ParamValues;
-use crate::integrators::path::sample_direct;
+use crate::integrators::path_tracer::sample_direct;
 use crate::integrators::scatter;
 use crate::light::emission::emit_photon;
 use crate::material::{Bsdf, TransportMode};

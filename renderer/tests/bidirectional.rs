@@ -2,50 +2,13 @@
 //! scenes with closed-form radiance, against the path tracer, strategy by strategy, and at
 //! the extremes of their parameters.
 
-use caustica_renderer::image::Image;
-use caustica_renderer::integrators::ParamValues;
 use caustica_renderer::procedural::{cornell_box, emissive_sphere, sphere_with_point_light};
 use caustica_renderer::scene::{Scene, SceneDescription};
 use caustica_renderer::session::{Session, SessionConfig};
 use std::sync::Arc;
 
-fn render(
-    desc: SceneDescription,
-    integrator: &str,
-    params: &[(&str, f64)],
-    passes: u64,
-    size: u32,
-    seed: u64,
-) -> (Image, u64) {
-    let session = Session::start(SessionConfig {
-        scene: Arc::new(Scene::build(desc).unwrap()),
-        integrator: integrator.into(),
-        params: params
-            .iter()
-            .map(|(k, v)| (k.to_string(), *v))
-            .collect::<ParamValues>(),
-        width: size,
-        height: size,
-        seed,
-        threads: 0,
-        max_passes: Some(passes),
-        time_limit: None,
-        on_frame: None,
-        target_rel_mse: None,
-    })
-    .unwrap();
-    let frame = session.wait();
-    assert_eq!(frame.image.count_non_finite(), 0);
-    ((*frame.image).clone(), frame.dropped)
-}
-
-fn mean(img: &Image) -> f64 {
-    img.pixels
-        .iter()
-        .map(|p| (p.x + p.y + p.z) as f64 / 3.0)
-        .sum::<f64>()
-        / img.pixels.len() as f64
-}
+mod common;
+use common::{mean, render};
 
 /// The mean over the image after each of `passes` passes of `integrator`, and the standard
 /// error of their average, from the spread of the per-pass means.
@@ -79,7 +42,7 @@ fn mean_and_standard_error(
 fn each_strategy_alone_converges_to_the_same_image() {
     use caustica_renderer::camera::PerspectiveCamera;
     use caustica_renderer::integrators::RenderContext;
-    use caustica_renderer::integrators::bdpt::{BdptIntegrator, BdptSettings};
+    use caustica_renderer::integrators::bdpt::{Bdpt, BdptSettings};
     let scene = Arc::new(Scene::build(cornell_box(false)).unwrap());
     let camera = PerspectiveCamera::new(&scene.camera, 16, 16);
     for depth in 1..=3usize {
@@ -89,7 +52,7 @@ fn each_strategy_alone_converges_to_the_same_image() {
             if t == 0 || (s, t) == (1, 1) {
                 continue;
             }
-            let mut bdpt = BdptIntegrator::new(
+            let mut bdpt = Bdpt::new(
                 RenderContext {
                     scene: scene.clone(),
                     camera,
@@ -355,7 +318,7 @@ fn mmlt_agrees_with_the_path_tracer_on_the_cornell_boxes() {
 #[test]
 fn the_technique_histogram_counts_every_step() {
     use caustica_renderer::camera::PerspectiveCamera;
-    use caustica_renderer::integrators::mmlt::{MmltIntegrator, MmltSettings};
+    use caustica_renderer::integrators::mmlt::{Mmlt, MmltSettings};
     use caustica_renderer::integrators::{Integrator, RenderContext};
     use std::sync::atomic::AtomicBool;
     let scene = Arc::new(Scene::build(cornell_box(true)).unwrap());
@@ -366,7 +329,7 @@ fn the_technique_histogram_counts_every_step() {
         max_depth: 6,
         ..Default::default()
     };
-    let mut mmlt = MmltIntegrator::new(
+    let mut mmlt = Mmlt::new(
         RenderContext {
             scene,
             camera,

@@ -9,12 +9,21 @@ use caustica_renderer::scene::{Scene, SceneDescription};
 use caustica_renderer::session::{RunState, Session, SessionConfig};
 use std::sync::Arc;
 
-fn render(desc: SceneDescription, passes: u64, size: u32, threads: usize) -> Image {
+fn render(
+    desc: SceneDescription,
+    params: &[(&str, f64)],
+    passes: u64,
+    size: u32,
+    threads: usize,
+) -> Image {
     let scene = Arc::new(Scene::build(desc).expect("scene builds"));
     let session = Session::start(SessionConfig {
         scene,
         integrator: "pt".into(),
-        params: ParamValues::new(),
+        params: params
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect::<ParamValues>(),
         width: size,
         height: size,
         seed: 7,
@@ -70,7 +79,7 @@ fn point_light_in_diffuse_sphere_gives_unit_radiance() {
     // rho = 0.5, I = pi at the centre of the unit sphere: L = rho E / (pi (1 - rho)) = 1.
     // A tessellated sphere's facets are nearer than 1 by at most 1 - cos(pi / 128): the
     // direct irradiance is high by at most 2 (1 - cos(pi/128)) / cos^2 = 6e-4 of it.
-    let img = render(sphere_with_point_light(128), 64, 48, 0);
+    let img = render(sphere_with_point_light(128), &[], 64, 48, 0);
     assert_uniform_radiance(&img, 1.0, 2e-3);
 }
 
@@ -79,15 +88,15 @@ fn closed_emissive_sphere_converges_to_le_over_one_minus_rho() {
     // rho = 0.8 needs ~5 bounces on average and exercises Russian roulette; exact for any
     // closed surface: L = Le + rho L.
     let (le, rho) = (0.2, 0.8);
-    let img = render(emissive_sphere(le, rho, 64), 64, 48, 0);
+    let img = render(emissive_sphere(le, rho, 64), &[], 64, 48, 0);
     assert_uniform_radiance(&img, (le / (1.0 - rho)) as f64, 1e-6);
 }
 
 #[test]
 fn same_seed_gives_identical_images_on_one_and_two_threads() {
     let desc = caustica_renderer::procedural::cornell_box(true);
-    let one = render(desc.clone(), 4, 40, 1);
-    let two = render(desc, 4, 40, 2);
+    let one = render(desc.clone(), &[], 4, 40, 1);
+    let two = render(desc, &[], 4, 40, 2);
     assert!(one.mean_luminance() > 0.0);
     assert_eq!(one, two, "thread count changed the image");
 }

@@ -36,7 +36,7 @@ const SETTLED: u64 = 16;
 /// than `FACTOR`): with a handful of samples a pixel's rare large values cannot be told apart
 /// as fireflies (the error is large against a small r) or as rare signal (r is large), and
 /// the robust denominator (`robust_reference_sq`) takes them for fireflies. Measured: 2.2 to
-/// 3.2 times the truth for BDPT at 4 passes, whose light-tracing splats are both.
+/// 3.4 times the truth for BDPT at 4 passes, whose light-tracing splats are both.
 const EARLY_FACTOR: f64 = 4.0;
 
 struct Checkpoint {

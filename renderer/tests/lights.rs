@@ -3,15 +3,15 @@
 //! one-sided emission, shadow rays and the MIS weights between strategies. A very narrow camera looks at one point p0 of the
 //! plane, so every pixel estimates the same radiance and their spread gives the tolerance.
 
-use caustica_renderer::integrators::ParamValues;
 use caustica_renderer::material::{Material, TransportMode};
 use caustica_renderer::procedural::{camera_looking, quad};
 use caustica_renderer::sampling::sampler::Sampler;
-use caustica_renderer::scene::{PunctualLightDesc, Scene, SceneDescription};
-use caustica_renderer::session::{Session, SessionConfig};
+use caustica_renderer::scene::{PunctualLightDesc, SceneDescription};
 use glam::{Vec2, Vec3};
 use std::f64::consts::PI;
-use std::sync::Arc;
+
+mod common;
+use common::render;
 
 const EYE: Vec3 = Vec3::new(0.0, 1.5, 3.0);
 
@@ -40,23 +40,9 @@ fn render_mean(desc: SceneDescription, passes: u64) -> Vec<(&'static str, (f64, 
     ["pt", "bdpt"]
         .into_iter()
         .map(|integrator| {
-            let session = Session::start(SessionConfig {
-                scene: Arc::new(Scene::build(desc.clone()).unwrap()),
-                integrator: integrator.into(),
-                params: ParamValues::new(),
-                width: 32,
-                height: 32,
-                seed: 3,
-                threads: 0,
-                max_passes: Some(passes),
-                time_limit: None,
-                on_frame: None,
-                target_rel_mse: None,
-            })
-            .unwrap();
-            let frame = session.wait();
-            assert_eq!(frame.dropped, 0);
-            let v: Vec<f64> = frame.image.pixels.iter().map(|p| p.x as f64).collect();
+            let (image, dropped) = render(desc.clone(), integrator, &[], passes, 32, 3);
+            assert_eq!(dropped, 0);
+            let v: Vec<f64> = image.pixels.iter().map(|p| p.x as f64).collect();
             let n = v.len() as f64;
             let mean = v.iter().sum::<f64>() / n;
             let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);

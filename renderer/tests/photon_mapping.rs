@@ -2,15 +2,14 @@
 //! their parameters, and against the path tracer.
 
 use caustica_renderer::image::Image;
-use caustica_renderer::integrators::ParamValues;
 use caustica_renderer::procedural::{emissive_sphere, sphere_with_point_light};
 use caustica_renderer::scene::{Scene, SceneDescription};
-use caustica_renderer::session::{Session, SessionConfig};
 use std::sync::Arc;
 
 mod common;
-use common::{MirroredLight, log_log_slope};
+use common::{MirroredLight, log_log_slope, mean};
 
+/// `common::render` with this file's seed.
 fn render(
     desc: SceneDescription,
     integrator: &str,
@@ -18,34 +17,7 @@ fn render(
     passes: u64,
     size: u32,
 ) -> (Image, u64) {
-    let session = Session::start(SessionConfig {
-        scene: Arc::new(Scene::build(desc).unwrap()),
-        integrator: integrator.into(),
-        params: params
-            .iter()
-            .map(|(k, v)| (k.to_string(), *v))
-            .collect::<ParamValues>(),
-        width: size,
-        height: size,
-        seed: 11,
-        threads: 0,
-        max_passes: Some(passes),
-        time_limit: None,
-        on_frame: None,
-        target_rel_mse: None,
-    })
-    .unwrap();
-    let frame = session.wait();
-    assert_eq!(frame.image.count_non_finite(), 0);
-    ((*frame.image).clone(), frame.dropped)
-}
-
-fn mean(img: &Image) -> f64 {
-    img.pixels
-        .iter()
-        .map(|p| (p.x + p.y + p.z) as f64 / 3.0)
-        .sum::<f64>()
-        / img.pixels.len() as f64
+    common::render(desc, integrator, params, passes, size, 11)
 }
 
 /// Every variant reproduces a uniform closed form. Half of the radiance in the point-lit

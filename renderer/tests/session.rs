@@ -91,11 +91,23 @@ fn bad_configurations_are_refused_before_any_thread_starts() {
 }
 
 #[test]
-fn parameters_that_invalidate_the_estimate_are_not_live() {
+fn only_live_parameters_in_range_change_a_running_session() {
     let mut session = Session::start(config(Some(1))).unwrap();
     let e = session.set_live_param("max_depth", 3.0).unwrap_err();
     assert!(e.contains("restart"), "{e}");
     assert!(session.set_live_param("no_such_thing", 1.0).is_err());
+
+    // A live parameter out of its range is refused, and nothing changes.
+    let mut c = config(Some(1));
+    c.integrator = "sppm".into();
+    let mut session = Session::start(c).unwrap();
+    for bad in [0.0, 1.5, f64::NAN] {
+        let e = session.set_live_param("alpha", bad).unwrap_err();
+        assert!(e.contains("alpha"), "{e}");
+    }
+    assert_eq!(session.params()["alpha"], 2.0 / 3.0);
+    session.set_live_param("alpha", 0.5).unwrap();
+    assert_eq!(session.params()["alpha"], 0.5);
 }
 
 #[test]

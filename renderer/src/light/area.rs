@@ -3,14 +3,22 @@
 //! (counter-clockwise winding) unless the material is double-sided. Points are sampled
 //! uniformly by area and the pdf converted to solid angle.
 
+use crate::geometry::{interpolate2, interpolate3};
 use crate::light::{LightLiSample, LightSampleContext};
+use crate::material::TextureRef;
 use crate::sampling::warp::sample_uniform_triangle;
-use crate::scene::Scene;
+use crate::texture::Texture;
 use glam::{Vec2, Vec3};
 
+/// The light of one emissive triangle: its geometry and its material's emission, copied out
+/// of the scene so that the light needs nothing else (but the textures) to be sampled.
 #[derive(Clone, Debug)]
 pub struct AreaLight {
-    pub triangle: u32,
+    pub positions: [Vec3; 3],
+    pub uvs: [Vec2; 3],
+    /// The material's emitted radiance, scaled by `emissive_texture` where there is one.
+    pub emission: Vec3,
+    pub emissive_texture: Option<TextureRef>,
     pub area: f32,
     /// Unit geometric normal of the front face.
     pub normal: Vec3,
@@ -21,22 +29,29 @@ pub struct AreaLight {
 
 impl AreaLight {
     /// Radiance leaving point `uv` of the light in direction `w`.
-    pub fn l(&self, scene: &Scene, uv: Vec2, w: Vec3) -> Vec3 {
+    pub fn l(&self, textures: &[Texture], uv: Vec2, w: Vec3) -> Vec3 {
         if !self.two_sided && self.normal.dot(w) <= 0.0 {
             return Vec3::ZERO;
         }
-        let material = scene.triangle_material(self.triangle);
-        material.emitted(&scene.textures, uv)
+        let texture = self
+            .emissive_texture
+            .and_then(|t| textures.get(t.texture as usize));
+        self.emission * texture.map_or(Vec3::ONE, |t| t.lookup(uv).truncate())
+    }
+
+    /// The point and texture coordinate at barycentric coordinates `b`.
+    pub fn point(&self, b: Vec3) -> (Vec3, Vec2) {
+        (interpolate3(&self.positions, b), interpolate2(&self.uvs, b))
     }
 
     pub fn sample_li(
         &self,
-        scene: &Scene,
+        textures: &[Texture],
         ctx: &LightSampleContext,
         u: Vec2,
     ) -> Option<LightLiSample> {
         let b = sample_uniform_triangle(u);
-        let (p_light, uv) = scene.triangle_point(self.triangle, b);
+        let (p_light, uv) = self.point(b);
         let d = p_light - ctx.p;
         let dist2 = d.length_squared();
         if !(dist2 > 0.0) {
@@ -49,7 +64,7 @@ impl AreaLight {
             return None;
         }
         let pdf = dist2 / (cos_light * self.area);
-        let l = self.l(scene, uv, -wi);
+        let l = self.l(textures, uv, -wi);
         if l == Vec3::ZERO || !pdf.is_finite() {
             return None;
         }
@@ -124,7 +139,7 @@ mod tests {
                 .enumerate()
                 .filter_map(|(i, l)| match l {
                     Light::Area(a) => {
-                        let p = &scene.positions[a.triangle as usize];
+                        let p = &a.positions;
                         intersect_triangle(&shear, f32::INFINITY, p[0], p[1], p[2])
                             .map(|h| scene.light_sampler.pmf(i) * a.pdf_li(ctx.p, ctx.p + w * h.t))
                     }
@@ -137,7 +152,7 @@ mod tests {
             |u, uc| {
                 let (i, _) = scene.light_sampler.sample(uc)?;
                 match &scene.lights[i] {
-                    Light::Area(a) => a.sample_li(&scene, &ctx, u).map(|s| s.wi),
+                    Light::Area(a) => a.sample_li(&scene.textures, &ctx, u).map(|s| s.wi),
                     _ => None,
                 }
             },

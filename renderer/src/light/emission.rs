@@ -69,7 +69,7 @@ pub fn sample_le(
     match light {
         Light::Area(a) => {
             let b = sample_uniform_triangle(u_pos);
-            let (p, uv) = scene.triangle_point(a.triangle, b);
+            let (p, uv) = a.point(b);
             // A two-sided emitter picks its side with probability 1/2.
             let (n, side_pdf) = if a.two_sided {
                 (if u_side < 0.5 { a.normal } else { -a.normal }, 0.5)
@@ -78,12 +78,8 @@ pub fn sample_le(
             };
             let local = sample_cosine_hemisphere(u_dir);
             let d = Frame::from_z(n).from_local(local);
-            let le = a.l(scene, uv, d);
-            let p_error = crate::scene::triangle::hit_point_and_error(
-                &scene.positions[a.triangle as usize],
-                b,
-            )
-            .1;
+            let le = a.l(&scene.textures, uv, d);
+            let p_error = crate::scene::triangle::hit_point_and_error(&a.positions, b).1;
             (le.max_element() > 0.0 && local.z > 0.0).then(|| EmittedRay {
                 ray: Ray::new(offset_ray_origin(p, p_error, n, d), d),
                 le,

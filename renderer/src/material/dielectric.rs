@@ -12,12 +12,12 @@ use crate::material::{BsdfSample, TransportMode};
 use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug)]
-pub struct SmoothDielectric {
+pub struct DielectricBsdf {
     pub eta: f32,
     pub tint: Vec3,
 }
 
-impl SmoothDielectric {
+impl DielectricBsdf {
     pub fn sample_f(&self, wo: Vec3, uc: f32, mode: TransportMode) -> Option<BsdfSample> {
         if wo.z == 0.0 {
             return None;
@@ -53,7 +53,7 @@ impl SmoothDielectric {
 }
 
 #[derive(Clone, Copy, Debug)]
-pub struct RoughDielectric {
+pub struct RoughDielectricBsdf {
     pub eta: f32,
     pub tint: Vec3,
     pub distrib: TrowbridgeReitz,
@@ -89,7 +89,7 @@ fn half_vector(wo: Vec3, wi: Vec3, eta: f32) -> Option<(Vec3, f32, bool)> {
     Some((wm, etap, reflect))
 }
 
-impl RoughDielectric {
+impl RoughDielectricBsdf {
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
         let Some((wm, etap, reflect)) = half_vector(wo, wi, self.eta) else {
             return Vec3::ZERO;

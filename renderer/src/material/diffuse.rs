@@ -6,11 +6,11 @@ use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
 #[derive(Clone, Copy, Debug)]
-pub struct DiffuseBxdf {
+pub struct DiffuseBsdf {
     pub r: Vec3,
 }
 
-impl DiffuseBxdf {
+impl DiffuseBsdf {
     pub fn f(&self, wo: Vec3, wi: Vec3) -> Vec3 {
         if wo.z * wi.z > 0.0 {
             self.r * FRAC_1_PI

@@ -18,7 +18,7 @@
 //! chosen by its weight, then a lobe within it; the pdf is the same mixture of lobe pdfs, so
 //! `sample_f` and `pdf` agree exactly.
 
-use crate::material::dielectric::RoughDielectric;
+use crate::material::dielectric::RoughDielectricBsdf;
 use crate::material::layering::{specular_albedo, specular_albedo_average};
 use crate::material::microfacet::{TrowbridgeReitz, fresnel_schlick};
 use crate::material::{BsdfSample, TransportMode};
@@ -27,7 +27,7 @@ use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
 #[derive(Clone, Copy, Debug)]
-pub struct MetallicRoughness {
+pub struct MetallicRoughnessBsdf {
     pub base_color: Vec3,
     pub metallic: f32,
     pub transmission: f32,
@@ -44,15 +44,15 @@ fn to_upper(wo: Vec3, wi: Vec3) -> (Vec3, Vec3) {
     }
 }
 
-impl MetallicRoughness {
+impl MetallicRoughnessBsdf {
     fn weights(&self) -> (f32, f32, f32) {
         let metal = self.metallic.clamp(0.0, 1.0);
         let tr = self.transmission.clamp(0.0, 1.0);
         (metal, (1.0 - metal) * (1.0 - tr), (1.0 - metal) * tr)
     }
 
-    fn glass(&self) -> RoughDielectric {
-        RoughDielectric {
+    fn glass(&self) -> RoughDielectricBsdf {
+        RoughDielectricBsdf {
             eta: self.eta,
             tint: self.base_color,
             distrib: self.distrib,

@@ -3,23 +3,23 @@
 //! names, each modelling only what it needs. All BSDFs work in the local shading frame (+z is
 //! the shading normal) and serve both faces of a surface.
 
-pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
 pub mod layering;
 pub mod metallic_roughness;
 pub mod microfacet;
+pub mod mirror;
 
 #[cfg(test)]
 mod tests;
 
-use crate::scene::texture::Texture;
-use conductor::MirrorBxdf;
-use dielectric::SmoothDielectric;
-use diffuse::DiffuseBxdf;
+use crate::texture::Texture;
+use dielectric::DielectricBsdf;
+use diffuse::DiffuseBsdf;
 use glam::{Vec2, Vec3};
-use metallic_roughness::MetallicRoughness;
+use metallic_roughness::MetallicRoughnessBsdf;
 use microfacet::TrowbridgeReitz;
+use mirror::MirrorBsdf;
 
 /// Whether a path carries radiance (from the camera) or importance (from a light); it matters
 /// for refraction's 1/eta^2 scaling (Veach's thesis, section 5.2).
@@ -64,10 +64,10 @@ impl BsdfSample {
 
 #[derive(Clone, Copy, Debug)]
 pub enum Bsdf {
-    Diffuse(DiffuseBxdf),
-    Mirror(MirrorBxdf),
-    Dielectric(SmoothDielectric),
-    MetallicRoughness(MetallicRoughness),
+    Diffuse(DiffuseBsdf),
+    Mirror(MirrorBsdf),
+    Dielectric(DielectricBsdf),
+    MetallicRoughness(MetallicRoughnessBsdf),
 }
 
 impl Bsdf {
@@ -195,20 +195,15 @@ impl Material {
             .map_or(glam::Vec4::ONE, |tex| tex.lookup(uv))
     }
 
-    /// Emitted radiance at texture coordinate `uv` (before the one-sidedness test).
-    pub fn emitted(&self, textures: &[Texture], uv: Vec2) -> Vec3 {
-        self.emission * Self::texture_rgba(textures, self.emissive_texture, uv).truncate()
-    }
-
     /// The BSDF at a point with texture coordinate `uv`.
     pub fn bsdf(&self, textures: &[Texture], uv: Vec2) -> Bsdf {
         let base = (self.base_color
             * Self::texture_rgba(textures, self.base_color_texture, uv).truncate())
         .clamp(Vec3::ZERO, Vec3::ONE);
         match self.kind() {
-            MaterialKind::Diffuse => Bsdf::Diffuse(DiffuseBxdf { r: base }),
-            MaterialKind::Mirror => Bsdf::Mirror(MirrorBxdf { r: base }),
-            MaterialKind::Dielectric => Bsdf::Dielectric(SmoothDielectric {
+            MaterialKind::Diffuse => Bsdf::Diffuse(DiffuseBsdf { r: base }),
+            MaterialKind::Mirror => Bsdf::Mirror(MirrorBsdf { r: base }),
+            MaterialKind::Dielectric => Bsdf::Dielectric(DielectricBsdf {
                 eta: self.ior,
                 tint: base,
             }),
@@ -216,7 +211,7 @@ impl Material {
                 let mr = Self::texture_rgba(textures, self.metallic_roughness_texture, uv);
                 let roughness = (self.roughness * mr.y).clamp(0.0, 1.0);
                 let metallic = (self.metallic * mr.z).clamp(0.0, 1.0);
-                Bsdf::MetallicRoughness(MetallicRoughness {
+                Bsdf::MetallicRoughness(MetallicRoughnessBsdf {
                     base_color: base,
                     metallic,
                     transmission: self.transmission.clamp(0.0, 1.0),
@@ -230,7 +225,7 @@ impl Material {
 
 /// A rough dielectric interface (glTF: transmission 1, metallic 0, roughness sqrt(alpha)).
 pub fn rough_dielectric(eta: f32, alpha: f32) -> Bsdf {
-    Bsdf::MetallicRoughness(MetallicRoughness {
+    Bsdf::MetallicRoughness(MetallicRoughnessBsdf {
         base_color: Vec3::ONE,
         metallic: 0.0,
         transmission: 1.0,

@@ -15,7 +15,7 @@ fn wo_at(cos_theta: f32) -> Vec3 {
 }
 
 fn mr(base: Vec3, metallic: f32, roughness: f32, transmission: f32) -> Bsdf {
-    Bsdf::MetallicRoughness(MetallicRoughness {
+    Bsdf::MetallicRoughness(MetallicRoughnessBsdf {
         base_color: base,
         metallic,
         transmission,
@@ -29,14 +29,14 @@ fn non_delta_cases() -> Vec<(&'static str, Bsdf, f32)> {
     vec![
         (
             "diffuse",
-            Bsdf::Diffuse(DiffuseBxdf {
+            Bsdf::Diffuse(DiffuseBsdf {
                 r: Vec3::splat(0.7),
             }),
             0.6,
         ),
         (
             "diffuse from below",
-            Bsdf::Diffuse(DiffuseBxdf {
+            Bsdf::Diffuse(DiffuseBsdf {
                 r: Vec3::splat(0.7),
             }),
             -0.4,
@@ -169,13 +169,13 @@ fn white_furnace_lossless_bsdfs_conserve_energy() {
     for cos_o in [0.9f32, 0.4, -0.3, -0.9] {
         let wo = wo_at(cos_o);
         let lossless = [
-            Bsdf::Diffuse(DiffuseBxdf { r: Vec3::ONE }),
-            Bsdf::Mirror(MirrorBxdf { r: Vec3::ONE }),
-            Bsdf::Dielectric(SmoothDielectric {
+            Bsdf::Diffuse(DiffuseBsdf { r: Vec3::ONE }),
+            Bsdf::Mirror(MirrorBsdf { r: Vec3::ONE }),
+            Bsdf::Dielectric(DielectricBsdf {
                 eta: 1.5,
                 tint: Vec3::ONE,
             }),
-            Bsdf::Dielectric(SmoothDielectric {
+            Bsdf::Dielectric(DielectricBsdf {
                 eta: 1.0,
                 tint: Vec3::ONE,
             }),
@@ -194,7 +194,7 @@ fn white_furnace_lossless_bsdfs_conserve_energy() {
 #[test]
 fn radiance_through_glass_is_compressed_by_eta_squared() {
     // Normal incidence from outside: T = 0.96, radiance transmitted scales by 1/1.5^2.
-    let glass = SmoothDielectric {
+    let glass = DielectricBsdf {
         eta: 1.5,
         tint: Vec3::ONE,
     };

@@ -6,8 +6,8 @@
 
 use crate::camera::CameraDesc;
 use crate::material::{Material, TextureRef};
-use crate::scene::texture::{Texture, Wrap};
 use crate::scene::{MeshDesc, PunctualLightDesc, Scene, SceneDescription, SceneError};
+use crate::texture::{Texture, Wrap};
 use glam::{Affine3A, Mat3, Mat4, Quat, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;

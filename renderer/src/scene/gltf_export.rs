@@ -136,44 +136,32 @@ pub fn to_gltf(desc: &SceneDescription) -> Value {
         .collect();
     let mut lights = Vec::new();
     for l in &desc.lights {
-        let (light, translation, direction) = match l {
+        let (kind, power, translation, direction) = match *l {
             PunctualLightDesc::Point {
                 position,
                 intensity,
-            } => {
-                let (c, i) = light_color(*intensity);
-                (
-                    json!({"type": "point", "color": c.to_array(), "intensity": i}),
-                    *position,
-                    Vec3::NEG_Z,
-                )
-            }
+            } => ("point", intensity, position, Vec3::NEG_Z),
             PunctualLightDesc::Spot {
                 position,
                 direction,
                 intensity,
-                inner_cone,
-                outer_cone,
-            } => {
-                let (c, i) = light_color(*intensity);
-                (
-                    json!({"type": "spot", "color": c.to_array(), "intensity": i, "spot": {"innerConeAngle": inner_cone, "outerConeAngle": outer_cone}}),
-                    *position,
-                    *direction,
-                )
-            }
+                ..
+            } => ("spot", intensity, position, direction),
             PunctualLightDesc::Directional {
                 direction,
                 irradiance,
-            } => {
-                let (c, i) = light_color(*irradiance);
-                (
-                    json!({"type": "directional", "color": c.to_array(), "intensity": i}),
-                    Vec3::ZERO,
-                    *direction,
-                )
-            }
+            } => ("directional", irradiance, Vec3::ZERO, direction),
         };
+        let (color, strength) = light_color(power);
+        let mut light = json!({"type": kind, "color": color.to_array(), "intensity": strength});
+        if let PunctualLightDesc::Spot {
+            inner_cone,
+            outer_cone,
+            ..
+        } = *l
+        {
+            light["spot"] = json!({"innerConeAngle": inner_cone, "outerConeAngle": outer_cone});
+        }
         lights.push(light);
         let rotation = Quat::from_rotation_arc(Vec3::NEG_Z, direction.normalize());
         nodes.push(json!({

@@ -3,24 +3,22 @@
 //! or a test produces), then shared by every worker thread through an `Arc`.
 
 pub mod accel;
+mod build;
 pub mod gltf;
 pub mod gltf_export;
-pub mod texture;
 pub mod triangle;
 
 use crate::camera::CameraDesc;
 use crate::geometry::{Bounds3, Frame, Ray, interpolate2, interpolate3, offset_ray_origin};
 use crate::light::area::AreaLight;
-use crate::light::environment::UniformEnvironment;
-use crate::light::punctual::{DirectionalLight, PointLight, SpotLight};
 use crate::light::sampler::PowerLightSampler;
 use crate::light::{Light, LightSampleContext};
 use crate::material::{Bsdf, Material};
+use crate::texture::Texture;
 use accel::Accel;
 use glam::{Vec2, Vec3};
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
-use texture::Texture;
+use std::time::Duration;
 
 /// A scene that could not be loaded or built: which file, and what is wrong with it.
 #[derive(Debug, Clone, thiserror::Error)]
@@ -188,225 +186,7 @@ pub struct Scene {
 
 pub const NO_LIGHT: u32 = u32::MAX;
 
-fn is_degenerate(p: &[Vec3; 3]) -> bool {
-    let area2 = (p[1] - p[0]).cross(p[2] - p[0]).length();
-    !(area2 > 0.0) || !area2.is_finite()
-}
-
 impl Scene {
-    /// Validates a description and builds the scene. Degenerate triangles are dropped and
-    /// counted; indices out of range or non-finite data are errors.
-    pub fn build(desc: SceneDescription) -> Result<Scene, SceneError> {
-        let SceneDescription {
-            name,
-            meshes,
-            mut materials,
-            textures,
-            lights: punctual,
-            camera,
-            mut warnings,
-        } = desc;
-        if materials.is_empty() {
-            materials.push(Material::default());
-        }
-        let default_material = materials.len() as u32 - 1;
-        let mut positions = Vec::new();
-        let mut attributes = Vec::new();
-        let mut dropped = 0usize;
-        let mut bounds = Bounds3::EMPTY;
-        for mesh in &meshes {
-            if mesh.indices.len() % 3 != 0 {
-                return Err(SceneError::new(format!(
-                    "mesh '{}': index count {} is not a multiple of 3",
-                    mesh.name,
-                    mesh.indices.len()
-                )));
-            }
-            if let Some(bad) = mesh.positions.iter().position(|p| !p.is_finite()) {
-                return Err(SceneError::new(format!(
-                    "mesh '{}': position {bad} is NaN or infinite",
-                    mesh.name
-                )));
-            }
-            let n = mesh.positions.len();
-            let check_len = |len: usize, what: &str| {
-                if len != n {
-                    return Err(SceneError::new(format!(
-                        "mesh '{}': {len} {what} for {n} positions",
-                        mesh.name
-                    )));
-                }
-                Ok(())
-            };
-            if let Some(normals) = &mesh.normals {
-                check_len(normals.len(), "normals")?;
-            }
-            if let Some(uvs) = &mesh.uvs {
-                check_len(uvs.len(), "texture coordinates")?;
-            }
-            let material = if (mesh.material as usize) < materials.len() {
-                mesh.material
-            } else {
-                default_material
-            };
-            for tri in mesh.indices.chunks_exact(3) {
-                let idx = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
-                if let Some(&bad) = idx.iter().find(|&&i| i >= n) {
-                    return Err(SceneError::new(format!(
-                        "mesh '{}': vertex index {bad} out of range ({n} vertices)",
-                        mesh.name
-                    )));
-                }
-                let p = idx.map(|i| mesh.positions[i]);
-                if is_degenerate(&p) {
-                    dropped += 1;
-                    continue;
-                }
-                let normals = mesh
-                    .normals
-                    .as_ref()
-                    .map(|ns| idx.map(|i| ns[i].normalize_or_zero()))
-                    .filter(|ns| ns.iter().all(|n| n.is_finite() && *n != Vec3::ZERO));
-                let uvs = mesh
-                    .uvs
-                    .as_ref()
-                    .map_or([Vec2::ZERO; 3], |uv| idx.map(|i| uv[i]));
-                let uvs = if uvs.iter().all(|u| u.is_finite()) {
-                    uvs
-                } else {
-                    [Vec2::ZERO; 3]
-                };
-                for q in p {
-                    bounds = bounds.union_point(q);
-                }
-                positions.push(p);
-                attributes.push(TriangleAttributes {
-                    normals,
-                    uvs,
-                    material,
-                });
-            }
-        }
-        if positions.is_empty() {
-            return Err(SceneError::new(if dropped > 0 {
-                format!("all {dropped} triangles are degenerate")
-            } else {
-                "the scene has no triangle meshes".to_string()
-            }));
-        }
-        if dropped > 0 {
-            warnings.push(format!(
-                "dropped {dropped} degenerate (zero-area) triangles"
-            ));
-        }
-        let (_, scene_radius) = bounds.bounding_sphere();
-
-        // Lights: every triangle with an emissive material, then the punctual lights.
-        let mut lights = Vec::new();
-        let mut triangle_light = vec![NO_LIGHT; positions.len()];
-        for (i, (p, attr)) in positions.iter().zip(&attributes).enumerate() {
-            let m = &materials[attr.material as usize];
-            if !m.is_emissive() {
-                continue;
-            }
-            let cross = (p[1] - p[0]).cross(p[2] - p[0]);
-            let mean = m.emission
-                * m.emissive_texture
-                    .and_then(|t| textures.get(t.texture as usize))
-                    .map_or(Vec3::ONE, |t| t.mean_rgb());
-            triangle_light[i] = lights.len() as u32;
-            lights.push(Light::Area(AreaLight {
-                triangle: i as u32,
-                area: 0.5 * cross.length(),
-                normal: cross.normalize(),
-                two_sided: m.double_sided,
-                mean_radiance: mean,
-            }));
-        }
-        for l in punctual {
-            lights.push(match l {
-                PunctualLightDesc::Point {
-                    position,
-                    intensity,
-                } => Light::Point(PointLight {
-                    position,
-                    intensity,
-                }),
-                PunctualLightDesc::Spot {
-                    position,
-                    direction,
-                    intensity,
-                    inner_cone,
-                    outer_cone,
-                } => Light::Spot(SpotLight {
-                    position,
-                    frame: Frame::from_z(direction.normalize_or(Vec3::NEG_Z)),
-                    intensity,
-                    cos_inner: inner_cone.cos(),
-                    cos_outer: outer_cone.cos(),
-                }),
-                PunctualLightDesc::Directional {
-                    direction,
-                    irradiance,
-                } => Light::Directional(DirectionalLight {
-                    direction: direction.normalize_or(Vec3::NEG_Z),
-                    irradiance,
-                    scene_radius,
-                }),
-            });
-        }
-        let default_environment = lights.is_empty();
-        let mut environment = None;
-        if default_environment {
-            warnings.push(
-                "the scene has no emitter: lit by a uniform environment of radiance 1".to_string(),
-            );
-            environment = Some(lights.len());
-            lights.push(Light::Environment(UniformEnvironment {
-                radiance: Vec3::ONE,
-                scene_radius,
-            }));
-        }
-        let light_sampler = PowerLightSampler::new(&lights);
-
-        let default_camera = camera.is_none();
-        if default_camera {
-            warnings.push(
-                "the scene has no camera: using a default one that frames its bounds".to_string(),
-            );
-        }
-        let camera = camera.unwrap_or_else(|| CameraDesc::framing(&bounds));
-
-        let start = Instant::now();
-        let extent = bounds.min.abs().max(bounds.max.abs()).max_element();
-        let accel = Accel::build(&positions, extent);
-        let info = SceneInfo {
-            name,
-            triangles: positions.len(),
-            lights: lights.len(),
-            degenerate_triangles_dropped: dropped,
-            default_camera,
-            default_environment,
-            warnings,
-            load_time: Duration::ZERO,
-            bvh_build_time: start.elapsed(),
-        };
-        Ok(Scene {
-            positions,
-            attributes,
-            materials,
-            textures,
-            lights,
-            light_sampler,
-            triangle_light,
-            environment,
-            camera,
-            bounds,
-            info,
-            accel,
-        })
-    }
-
     pub fn triangle_material(&self, triangle: u32) -> &Material {
         &self.materials[self.attributes[triangle as usize].material as usize]
     }
@@ -488,7 +268,7 @@ impl Scene {
     /// Radiance emitted by the surface at `si` towards `w`.
     pub fn emitted(&self, si: &SurfaceInteraction, w: Vec3) -> Vec3 {
         self.area_light(si)
-            .map_or(Vec3::ZERO, |(_, a)| a.l(self, si.uv, w))
+            .map_or(Vec3::ZERO, |(_, a)| a.l(&self.textures, si.uv, w))
     }
 
     /// Radiance arriving along a ray that left the scene.

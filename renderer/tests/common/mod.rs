@@ -3,7 +3,52 @@
 #![allow(dead_code)]
 
 use caustica_renderer::image::Image;
-use caustica_renderer::scene::SceneDescription;
+use caustica_renderer::integrators::ParamValues;
+use caustica_renderer::scene::{Scene, SceneDescription};
+use caustica_renderer::session::{Session, SessionConfig};
+use std::sync::Arc;
+
+/// Renders `passes` passes of `integrator` with `params` (over its defaults) at `size` x
+/// `size` on every core, and returns the image (checked free of NaN and Inf) and the count of
+/// samples dropped at their source.
+pub fn render(
+    desc: SceneDescription,
+    integrator: &str,
+    params: &[(&str, f64)],
+    passes: u64,
+    size: u32,
+    seed: u64,
+) -> (Image, u64) {
+    let session = Session::start(SessionConfig {
+        scene: Arc::new(Scene::build(desc).unwrap()),
+        integrator: integrator.into(),
+        params: params
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect::<ParamValues>(),
+        width: size,
+        height: size,
+        seed,
+        threads: 0,
+        max_passes: Some(passes),
+        time_limit: None,
+        on_frame: None,
+        target_rel_mse: None,
+    })
+    .unwrap();
+    let frame = session.wait();
+    assert_eq!(frame.image.count_non_finite(), 0);
+    ((*frame.image).clone(), frame.dropped)
+}
+
+/// The mean over pixels of the mean over channels.
+pub fn mean(img: &Image) -> f64 {
+    img.pixels
+        .iter()
+        .map(|p| (p.x + p.y + p.z) as f64 / 3.0)
+        .sum::<f64>()
+        / img.pixels.len() as f64
+}
 
 /// Least-squares slope of log y against log x.
 pub fn log_log_slope(points: &[(f64, f64)]) -> f64 {

@@ -75,7 +75,7 @@ pub fn connect(
         let (index, pmf) = scene.light_sampler.sample(ul)?;
         let ctx: LightSampleContext = si.light_context();
         let ls = match &scene.lights[index] {
-            Light::Area(a) => a.sample_li(scene, &ctx, u),
+            Light::Area(a) => a.sample_li(&scene.textures, &ctx, u),
             Light::Point(p) => p.sample_li(&ctx),
             Light::Spot(sp) => sp.sample_li(&ctx),
             Light::Directional(d) => d.sample_li(&ctx),

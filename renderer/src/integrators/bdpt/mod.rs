@@ -15,15 +15,19 @@ pub mod connect;
 pub mod subpath;
 pub mod vertex;
 
+use crate::camera::PerspectiveCamera;
 use crate::error_estimate::ErrorEstimate;
 use crate::film::{Film, sanitize};
 use crate::image::Image;
-use crate::integrators::{Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext};
+use crate::integrators::pixel_pass::{RowOutput, pixel_pass};
+use crate::integrators::{
+    Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext, params,
+};
 use crate::sampling::sampler::Sampler;
+use crate::scene::Scene;
 use connect::connect;
 use glam::{Vec2, Vec3};
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use subpath::{Termination, camera_subpath, light_subpath};
 use vertex::Vertex;
 
@@ -37,42 +41,31 @@ pub struct BdptSettings {
 }
 
 impl BdptSettings {
-    pub const PARAMS: &'static [ParamSpec] = &[ParamSpec {
-        name: "max_depth",
-        doc: "Maximum number of bounces of a path; Russian roulette ends most subpaths earlier.",
-        default: 64.0,
-        min: 0.0,
-        max: 1024.0,
-        integer: true,
-        live: false,
-    }];
+    pub const PARAMS: &'static [ParamSpec] = &[params::MAX_DEPTH];
 
     pub fn from_params(p: &ParamValues) -> Self {
         BdptSettings {
-            max_depth: p
-                .get("max_depth")
-                .copied()
-                .unwrap_or(Self::PARAMS[0].default) as u32,
+            max_depth: params::param_value(Self::PARAMS, p, "max_depth") as u32,
             only_strategy: None,
         }
     }
 }
 
 pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
-    Box::new(BdptIntegrator::new(ctx, BdptSettings::from_params(params)))
+    Box::new(Bdpt::new(ctx, BdptSettings::from_params(params)))
 }
 
-pub struct BdptIntegrator {
+pub struct Bdpt {
     ctx: RenderContext,
     settings: BdptSettings,
     film: Film,
     pass_buffer: Vec<Vec3>,
 }
 
-impl BdptIntegrator {
+impl Bdpt {
     pub fn new(ctx: RenderContext, settings: BdptSettings) -> Self {
         let (w, h) = (ctx.camera.width as usize, ctx.camera.height as usize);
-        BdptIntegrator {
+        Bdpt {
             ctx,
             settings,
             film: Film::new(w, h),
@@ -81,108 +74,20 @@ impl BdptIntegrator {
     }
 }
 
-/// Per-row results of a pass: statistics and the t = 1 splats (pixel, value).
-struct RowResult {
-    stats: PassStats,
-    splats: Vec<(usize, Vec3)>,
-}
-
-impl Integrator for BdptIntegrator {
+impl Integrator for Bdpt {
     fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
+        let (scene, camera, settings) = (&*self.ctx.scene, &self.ctx.camera, self.settings);
         let width = self.film.width;
-        let (scene, camera, seed, settings) = (
-            &*self.ctx.scene,
-            &self.ctx.camera,
+        let stats = pixel_pass(
+            &mut self.pass_buffer,
+            width,
             self.ctx.seed,
-            self.settings,
-        );
-        let max_depth = settings.max_depth as usize;
-        let rows: Vec<RowResult> = self
-            .pass_buffer
-            .par_chunks_mut(width)
-            .enumerate()
-            .map(|(y, row)| {
-                if cancel.load(Ordering::Relaxed) {
-                    return Err(Cancelled);
-                }
-                let mut sampler = Sampler::new(seed);
-                let mut result = RowResult {
-                    stats: PassStats::default(),
-                    splats: Vec::new(),
-                };
-                let (mut camera_path, mut light_path) =
-                    (Vec::<Vertex>::new(), Vec::<Vertex>::new());
-                for (x, out) in row.iter_mut().enumerate() {
-                    sampler.start_pixel_sample((y * width + x) as u64, pass);
-                    let film = Vec2::new(x as f32, y as f32) + sampler.get_2d();
-                    let st = &mut result.stats;
-                    camera_subpath(
-                        scene,
-                        camera,
-                        film,
-                        &mut sampler,
-                        max_depth + 2,
-                        Termination::Roulette,
-                        &mut st.rays,
-                        &mut camera_path,
-                    );
-                    light_subpath(
-                        scene,
-                        &mut sampler,
-                        max_depth + 1,
-                        Termination::Roulette,
-                        &mut st.rays,
-                        &mut light_path,
-                    );
-                    let mut l = Vec3::ZERO;
-                    for t in 1..=camera_path.len() {
-                        for s in 0..=light_path.len() {
-                            let depth = (s + t) as i64 - 2;
-                            if (s == 1 && t == 1) || depth < 0 || depth > max_depth as i64 {
-                                continue;
-                            }
-                            if settings.only_strategy.is_some_and(|o| o != (s, t)) {
-                                continue;
-                            }
-                            let Some(c) = connect(
-                                scene,
-                                camera,
-                                &light_path,
-                                &camera_path,
-                                s,
-                                t,
-                                &mut sampler,
-                                &mut st.rays,
-                                settings.only_strategy.is_none(),
-                            ) else {
-                                continue;
-                            };
-                            let Some(v) = sanitize(c.l * c.mis) else {
-                                st.dropped += 1;
-                                continue;
-                            };
-                            match c.raster {
-                                Some(r) => {
-                                    let (px, py) = (r.x as usize, r.y as usize);
-                                    result.splats.push((py * width + px, v));
-                                }
-                                None => l += v,
-                            }
-                        }
-                    }
-                    *out = l;
-                    st.samples += 1;
-                }
-                Ok(result)
-            })
-            .collect::<Result<_, _>>()?;
-        let mut stats = PassStats::default();
-        for r in rows {
-            stats = stats + r.stats;
-            for (i, v) in r.splats {
-                self.pass_buffer[i] += v;
-            }
-        }
+            pass,
+            cancel,
+            |film, sampler, paths: &mut Subpaths, row| {
+                sample_pixel(scene, camera, &settings, film, sampler, paths, row)
+            },
+        )?;
         self.film.add_pass(&self.pass_buffer);
         Ok(stats)
     }
@@ -191,11 +96,82 @@ impl Integrator for BdptIntegrator {
         self.film.image()
     }
 
-    fn set_live_param(&mut self, _name: &str, _value: f64) -> bool {
-        false
-    }
-
     fn error_estimate(&self) -> Option<ErrorEstimate> {
         self.film.error_estimate()
     }
+}
+
+/// A row's camera and light subpath buffers, reused from pixel to pixel.
+type Subpaths = (Vec<Vertex>, Vec<Vertex>);
+
+/// One pixel sample: a camera and a light subpath joined by every strategy; returns the
+/// pixel's own value and splats the t = 1 strategies' into `row`.
+fn sample_pixel(
+    scene: &Scene,
+    camera: &PerspectiveCamera,
+    settings: &BdptSettings,
+    film: Vec2,
+    sampler: &mut Sampler,
+    (camera_path, light_path): &mut Subpaths,
+    row: &mut RowOutput,
+) -> Vec3 {
+    let max_depth = settings.max_depth as usize;
+    let width = camera.width as usize;
+    let st = &mut row.stats;
+    camera_subpath(
+        scene,
+        camera,
+        film,
+        sampler,
+        max_depth + 2,
+        Termination::Roulette,
+        &mut st.rays,
+        camera_path,
+    );
+    light_subpath(
+        scene,
+        sampler,
+        max_depth + 1,
+        Termination::Roulette,
+        &mut st.rays,
+        light_path,
+    );
+    let mut l = Vec3::ZERO;
+    for t in 1..=camera_path.len() {
+        for s in 0..=light_path.len() {
+            let depth = (s + t) as i64 - 2;
+            if (s == 1 && t == 1) || depth < 0 || depth > max_depth as i64 {
+                continue;
+            }
+            if settings.only_strategy.is_some_and(|o| o != (s, t)) {
+                continue;
+            }
+            let Some(c) = connect(
+                scene,
+                camera,
+                light_path,
+                camera_path,
+                s,
+                t,
+                sampler,
+                &mut st.rays,
+                settings.only_strategy.is_none(),
+            ) else {
+                continue;
+            };
+            let Some(v) = sanitize(c.l * c.mis) else {
+                st.dropped += 1;
+                continue;
+            };
+            match c.raster {
+                Some(r) => {
+                    let (px, py) = (r.x as usize, r.y as usize);
+                    row.splats.push((py * width + px, v));
+                }
+                None => l += v,
+            }
+        }
+    }
+    st.samples += 1;
+    l
 }

@@ -113,13 +113,13 @@ impl MmltSettings {
     ];
 
     pub fn from_params(p: &ParamValues) -> Self {
-        let get = |name: &str| crate::integrators::param_or_default(Self::PARAMS, p, name);
+        let get = |name: &str| crate::integrators::param_value(Self::PARAMS, p, name);
         MmltSettings {
-            large_step_prob: get("large_step").clamp(0.0, 1.0),
-            sigma: get("sigma").clamp(1e-5, 1.0),
-            bootstrap: get("bootstrap").max(1.0) as u64,
-            chains: get("chains").max(1.0) as u64,
-            max_depth: get("max_depth").clamp(0.0, 64.0) as u32,
+            large_step_prob: get("large_step"),
+            sigma: get("sigma"),
+            bootstrap: get("bootstrap") as u64,
+            chains: get("chains") as u64,
+            max_depth: get("max_depth") as u32,
         }
     }
 }
@@ -131,7 +131,7 @@ impl Default for MmltSettings {
 }
 
 pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
-    Box::new(MmltIntegrator::new(ctx, MmltSettings::from_params(params)))
+    Box::new(Mmlt::new(ctx, MmltSettings::from_params(params)))
 }
 
 const CHAIN_SEEDING: u64 = 0x3e7a_0c4a_1a55_0001;
@@ -159,7 +159,7 @@ enum Phase {
     },
 }
 
-pub struct MmltIntegrator {
+pub struct Mmlt {
     ctx: RenderContext,
     settings: MmltSettings,
     phase: Phase,
@@ -174,10 +174,10 @@ pub struct MmltIntegrator {
     bootstrap_per_length: Vec<f64>,
 }
 
-impl MmltIntegrator {
+impl Mmlt {
     pub fn new(ctx: RenderContext, settings: MmltSettings) -> Self {
         let pixels = (ctx.camera.width * ctx.camera.height) as usize;
-        MmltIntegrator {
+        Mmlt {
             ctx,
             settings,
             phase: Phase::Starting,
@@ -322,7 +322,7 @@ impl MmltIntegrator {
     }
 }
 
-impl Integrator for MmltIntegrator {
+impl Integrator for Mmlt {
     fn render_pass(&mut self, _pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let mut stats = PassStats::default();
         if matches!(self.phase, Phase::Starting) {
@@ -469,13 +469,12 @@ impl Integrator for MmltIntegrator {
         )
     }
 
-    fn set_live_param(&mut self, name: &str, value: f64) -> bool {
+    fn set_live_param(&mut self, name: &str, value: f64) {
         match name {
-            "large_step" => self.settings.large_step_prob = value.clamp(0.0, 1.0),
-            "sigma" => self.settings.sigma = value.clamp(1e-5, 1.0),
-            _ => return false,
+            "large_step" => self.settings.large_step_prob = value,
+            "sigma" => self.settings.sigma = value,
+            _ => debug_assert!(false, "{name} is not live"),
         }
-        true
     }
 
     fn plots(&self) -> Vec<PlotSeries> {

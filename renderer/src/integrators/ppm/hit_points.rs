@@ -4,7 +4,7 @@
 //! MIS: photons never carry direct light) form the pixel's direct estimate (DESIGN.md 4).
 
 use crate::geometry::Ray;
-use crate::integrators::path::sample_direct;
+use crate::integrators::path_tracer::sample_direct;
 use crate::integrators::scatter;
 use crate::material::{Bsdf, TransportMode};
 use crate::sampling::sampler::Sampler;

@@ -1,6 +1,7 @@
 //! Image textures: linear RGBA in f32, bilinear lookup with glTF's wrap modes.
 //! glTF's texture origin is the top-left corner of the image (spec section 3.8.4.1).
 
+use crate::color::srgb_to_linear;
 use glam::{Vec2, Vec3, Vec4};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,23 +31,6 @@ fn wrap_index(i: i64, n: usize, wrap: Wrap) -> usize {
         }
     };
     i as usize
-}
-
-/// The sRGB electro-optical transfer function (IEC 61966-2-1), 8-bit value to linear.
-pub fn srgb_to_linear(v: f32) -> f32 {
-    if v <= 0.04045 {
-        v / 12.92
-    } else {
-        ((v + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-pub fn linear_to_srgb(v: f32) -> f32 {
-    if v <= 0.003_130_8 {
-        v * 12.92
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    }
 }
 
 impl Texture {
@@ -118,13 +102,6 @@ mod tests {
         assert_eq!(wrap_index(5, 4, Wrap::ClampToEdge), 3);
         assert_eq!(wrap_index(4, 4, Wrap::MirroredRepeat), 3);
         assert_eq!(wrap_index(-1, 4, Wrap::MirroredRepeat), 0);
-    }
-
-    #[test]
-    fn srgb_round_trip() {
-        for v in [0.0, 0.001, 0.2, 0.5, 1.0] {
-            assert!((linear_to_srgb(srgb_to_linear(v)) - v).abs() < 1e-5);
-        }
     }
 
     #[test]

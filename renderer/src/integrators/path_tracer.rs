@@ -8,17 +8,17 @@ use crate::error_estimate::ErrorEstimate;
 use crate::film::{Film, sanitize};
 use crate::geometry::Ray;
 use crate::image::Image;
+use crate::integrators::pixel_pass::pixel_pass;
 use crate::integrators::{
-    Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext, scatter,
+    Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext, params, scatter,
 };
 use crate::light::Light;
 use crate::material::{Bsdf, TransportMode};
 use crate::sampling::sampler::Sampler;
 use crate::sampling::warp::power_heuristic;
 use crate::scene::{Scene, SurfaceInteraction};
-use glam::{Vec2, Vec3};
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
+use glam::Vec3;
+use std::sync::atomic::AtomicBool;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathSettings {
@@ -27,22 +27,11 @@ pub struct PathSettings {
 }
 
 impl PathSettings {
-    pub const PARAMS: &'static [ParamSpec] = &[ParamSpec {
-        name: "max_depth",
-        doc: "Maximum number of bounces of a path; Russian roulette ends most paths earlier.",
-        default: 64.0,
-        min: 0.0,
-        max: 1024.0,
-        integer: true,
-        live: false,
-    }];
+    pub const PARAMS: &'static [ParamSpec] = &[params::MAX_DEPTH];
 
     pub fn from_params(p: &ParamValues) -> Self {
         PathSettings {
-            max_depth: p
-                .get("max_depth")
-                .copied()
-                .unwrap_or(Self::PARAMS[0].default) as u32,
+            max_depth: params::param_value(Self::PARAMS, p, "max_depth") as u32,
         }
     }
 }
@@ -53,7 +42,7 @@ impl Default for PathSettings {
     }
 }
 
-pub struct PathIntegrator {
+pub struct PathTracer {
     ctx: RenderContext,
     settings: PathSettings,
     film: Film,
@@ -61,13 +50,13 @@ pub struct PathIntegrator {
 }
 
 pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
-    Box::new(PathIntegrator::new(ctx, PathSettings::from_params(params)))
+    Box::new(PathTracer::new(ctx, PathSettings::from_params(params)))
 }
 
-impl PathIntegrator {
+impl PathTracer {
     pub fn new(ctx: RenderContext, settings: PathSettings) -> Self {
         let (w, h) = (ctx.camera.width as usize, ctx.camera.height as usize);
-        PathIntegrator {
+        PathTracer {
             ctx,
             settings,
             film: Film::new(w, h),
@@ -76,55 +65,32 @@ impl PathIntegrator {
     }
 }
 
-impl Integrator for PathIntegrator {
+impl Integrator for PathTracer {
     fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
+        let (scene, camera, settings) = (&*self.ctx.scene, &self.ctx.camera, self.settings);
         let width = self.film.width;
-        let (scene, camera, seed, settings) = (
-            &*self.ctx.scene,
-            &self.ctx.camera,
+        let stats = pixel_pass(
+            &mut self.pass_buffer,
+            width,
             self.ctx.seed,
-            self.settings,
-        );
-        let stats = self
-            .pass_buffer
-            .par_chunks_mut(width)
-            .enumerate()
-            .map(|(y, row)| {
-                if cancel.load(Ordering::Relaxed) {
-                    return Err(Cancelled);
-                }
-                let mut sampler = Sampler::new(seed);
-                let mut stats = PassStats::default();
-                for (x, out) in row.iter_mut().enumerate() {
-                    sampler.start_pixel_sample((y * width + x) as u64, pass);
-                    let film = Vec2::new(x as f32, y as f32) + sampler.get_2d();
-                    let ray = camera.generate_ray(film);
-                    let l = li(
-                        scene,
-                        ray,
-                        &mut sampler,
-                        settings.max_depth,
-                        &mut stats.rays,
-                    );
-                    stats.samples += 1;
-                    *out = sanitize(l).unwrap_or_else(|| {
-                        stats.dropped += 1;
-                        Vec3::ZERO
-                    });
-                }
-                Ok(stats)
-            })
-            .try_reduce(PassStats::default, |a, b| Ok(a + b))?;
+            pass,
+            cancel,
+            |film, sampler, _: &mut (), row| {
+                let ray = camera.generate_ray(film);
+                let l = li(scene, ray, sampler, &settings, &mut row.stats.rays);
+                row.stats.samples += 1;
+                sanitize(l).unwrap_or_else(|| {
+                    row.stats.dropped += 1;
+                    Vec3::ZERO
+                })
+            },
+        )?;
         self.film.add_pass(&self.pass_buffer);
         Ok(stats)
     }
 
     fn image(&self) -> Image {
         self.film.image()
-    }
-
-    fn set_live_param(&mut self, _name: &str, _value: f64) -> bool {
-        false
     }
 
     fn error_estimate(&self) -> Option<ErrorEstimate> {
@@ -137,9 +103,10 @@ pub fn li(
     scene: &Scene,
     mut ray: Ray,
     sampler: &mut Sampler,
-    max_depth: u32,
+    settings: &PathSettings,
     rays: &mut u64,
 ) -> Vec3 {
+    let max_depth = settings.max_depth;
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     let mut specular_bounce = false;
@@ -166,7 +133,7 @@ pub fn li(
             break;
         };
         if let Some((light, area)) = scene.area_light(&si) {
-            let le = area.l(scene, si.uv, si.wo);
+            let le = area.l(&scene.textures, si.uv, si.wo);
             if le != Vec3::ZERO {
                 let w = if depth == 0 || specular_bounce {
                     1.0
@@ -233,7 +200,7 @@ pub(crate) fn sample_direct(
     };
     let ctx = si.light_context();
     let sample = match &scene.lights[index] {
-        Light::Area(a) => a.sample_li(scene, &ctx, u),
+        Light::Area(a) => a.sample_li(&scene.textures, &ctx, u),
         Light::Point(p) => p.sample_li(&ctx),
         Light::Spot(s) => s.sample_li(&ctx),
         Light::Directional(d) => d.sample_li(&ctx),

@@ -5,11 +5,11 @@ use crate::material::BsdfSample;
 use glam::Vec3;
 
 #[derive(Clone, Copy, Debug)]
-pub struct MirrorBxdf {
+pub struct MirrorBsdf {
     pub r: Vec3,
 }
 
-impl MirrorBxdf {
+impl MirrorBsdf {
     pub fn sample_f(&self, wo: Vec3) -> Option<BsdfSample> {
         if wo.z == 0.0 {
             return None;

@@ -1,0 +1,88 @@
+//! What the viewer measures about itself (time to the first frame, UI frame rate, resident
+//! memory) and the scripted run of the end-to-end test: a screenshot after some seconds of
+//! rendering, then quit.
+
+use crate::viewer::ViewerApp;
+use eframe::egui;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// A scripted run: save a screenshot of the window to `screenshot` once the render has been
+/// shown for `after`, then close.
+#[derive(Clone, Debug)]
+pub struct Automation {
+    pub screenshot: PathBuf,
+    pub after: Duration,
+}
+
+/// Timings the viewer measures about itself (shown in the panel, printed by automation).
+#[derive(Clone, Debug, Default)]
+pub struct ViewerTimings {
+    pub first_frame_shown: Option<Duration>,
+    pub ui_frames: u64,
+    pub ui_fps: f32,
+    window: (u64, Option<Instant>),
+}
+
+impl ViewerApp {
+    pub(super) fn update_timings(&mut self) {
+        let t = &mut self.timings;
+        t.ui_frames += 1;
+        let now = Instant::now();
+        match t.window {
+            (_, None) => t.window = (t.ui_frames, Some(now)),
+            (start_frames, Some(start)) if now - start >= Duration::from_secs(1) => {
+                t.ui_fps = (t.ui_frames - start_frames) as f32 / (now - start).as_secs_f32();
+                t.window = (t.ui_frames, Some(now));
+            }
+            _ => {}
+        }
+        if t.first_frame_shown.is_none() && self.controller.frame().is_some_and(|f| f.passes > 0) {
+            t.first_frame_shown = Some(self.started.elapsed());
+        }
+    }
+
+    /// Scripted screenshot for the end-to-end test: eframe's own screenshot, saved as PNG,
+    /// then the window closes.
+    pub(super) fn automate(&mut self, ctx: &egui::Context) {
+        let Some(auto) = self.automation.clone() else {
+            return;
+        };
+        let shown_for = self
+            .timings
+            .first_frame_shown
+            .map(|t| self.started.elapsed().saturating_sub(t));
+        if !self.screenshot_requested && shown_for.is_some_and(|d| d >= auto.after) {
+            self.screenshot_requested = true;
+            let t = self.timings.clone();
+            let upload = self.viewport.last_upload.unwrap_or_default();
+            let closer = ctx.clone();
+            let callback = egui::ScreenshotCallback::new(move |image: Arc<egui::ColorImage>| {
+                let [w, h] = image.size;
+                let rgba: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+                let result = ::image::RgbaImage::from_raw(w as u32, h as u32, rgba)
+                    .ok_or_else(|| "bad screenshot".to_string())
+                    .and_then(|img| img.save(&auto.screenshot).map_err(|e| e.to_string()));
+                eprintln!(
+                    "automation: screenshot {} ({result:?}); first frame shown after {:.2} s; {:.1} UI frames/s; last upload {:.2} ms",
+                    auto.screenshot.display(),
+                    t.first_frame_shown.unwrap_or_default().as_secs_f64(),
+                    t.ui_fps,
+                    upload.as_secs_f64() * 1e3
+                );
+                closer.send_viewport_cmd(egui::ViewportCommand::Close);
+                closer.request_repaint();
+            });
+            ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(callback));
+        }
+        ctx.request_repaint_after(Duration::from_millis(50));
+    }
+}
+
+/// Resident memory of this process (Linux), for the statistics panel.
+pub fn resident_bytes() -> Option<u64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    Some(pages * 4096)
+}

@@ -1,0 +1,212 @@
+//! The viewer's state on the UI thread (settings, view, messages, the background controller)
+//! and `apply`, which carries out a `Command`. Nothing here waits for the renderer.
+
+use crate::viewer::automation::{Automation, ViewerTimings};
+use crate::viewer::command::{Command, Message};
+use crate::viewer::controller::{ParamEffect, RenderController};
+use crate::viewer::convergence::Convergence;
+use crate::viewer::dialogs::DialogPurpose;
+use crate::viewer::error_map::ErrorMap;
+use crate::viewer::settings::{STORAGE_KEY, ViewerSettings};
+use crate::viewer::tonemap;
+use crate::viewer::viewport::{HoveredPixel, Viewport};
+use caustica_renderer::integrators;
+use caustica_renderer::session::{MAX_RESOLUTION, RunState};
+use eframe::egui;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::time::Instant;
+
+/// What the viewer was started with.
+#[derive(Clone, Debug, Default)]
+pub struct ViewerOptions {
+    pub scene: Option<PathBuf>,
+    pub reference: Option<PathBuf>,
+    /// When the program started, so the time to the first frame includes opening the window.
+    pub launched: Option<Instant>,
+    /// Integrator, overriding the remembered one.
+    pub integrator: Option<String>,
+    /// Render size, overriding the remembered one.
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    /// Scripted run for tests: save a screenshot after some seconds of rendering, then quit.
+    pub automation: Option<Automation>,
+}
+
+/// The viewer: its settings and view on the UI thread, the render and the loads in the
+/// background (`controller`), what it measures and what it tells the user.
+pub struct ViewerApp {
+    pub settings: ViewerSettings,
+    pub controller: RenderController,
+    pub convergence: Convergence,
+    pub error_map: ErrorMap,
+    pub viewport: Viewport,
+    pub messages: Vec<Message>,
+    /// Where snapshots go.
+    pub snapshot_dir: PathBuf,
+    pub hovered: Option<HoveredPixel>,
+    pub(super) timings: ViewerTimings,
+    /// Show process readouts (memory, UI frame rate); snapshot tests turn them off because
+    /// they change from run to run.
+    pub show_process_stats: bool,
+    pub(super) saves: (
+        Sender<Result<PathBuf, String>>,
+        Receiver<Result<PathBuf, String>>,
+    ),
+    pub(super) open_dialog: Option<(DialogPurpose, egui_file::FileDialog)>,
+    pub(super) sessions_seen: u64,
+    pub(super) automation: Option<Automation>,
+    pub(super) screenshot_requested: bool,
+    pub(super) started: Instant,
+}
+
+impl ViewerApp {
+    pub fn new(cc: &eframe::CreationContext<'_>, options: ViewerOptions) -> Self {
+        let settings: ViewerSettings = cc
+            .storage
+            .and_then(|s| eframe::get_value(s, STORAGE_KEY))
+            .unwrap_or_default();
+        if let Some(rs) = cc.wgpu_render_state.as_ref() {
+            tonemap::init(rs);
+        }
+        let ctx = cc.egui_ctx.clone();
+        let repaint: Arc<dyn Fn() + Send + Sync> = Arc::new(move || ctx.request_repaint());
+        let mut app = ViewerApp {
+            settings: settings.sanitized(),
+            controller: RenderController::new(repaint.clone()),
+            convergence: Convergence::new(repaint),
+            error_map: ErrorMap::default(),
+            viewport: Viewport::default(),
+            messages: Vec::new(),
+            snapshot_dir: PathBuf::from("."),
+            hovered: None,
+            timings: ViewerTimings::default(),
+            show_process_stats: true,
+            saves: channel(),
+            open_dialog: None,
+            sessions_seen: 0,
+            automation: options.automation,
+            screenshot_requested: false,
+            started: options.launched.unwrap_or_else(Instant::now),
+        };
+        if let Some(name) = options.integrator {
+            app.apply(Command::SetIntegrator(name.clone()));
+            if app.settings.integrator != name {
+                app.error(format!("unknown integrator '{name}'"));
+            }
+        }
+        app.settings.width = options.width.unwrap_or(app.settings.width);
+        app.settings.height = options.height.unwrap_or(app.settings.height);
+        if let Some(scene) = options.scene {
+            app.apply(Command::OpenScene(scene));
+        }
+        if let Some(reference) = options.reference {
+            app.apply(Command::LoadReference(reference));
+        }
+        app
+    }
+
+    pub(super) fn info(&mut self, text: impl Into<String>) {
+        self.messages.push(Message {
+            text: text.into(),
+            is_error: false,
+        });
+    }
+
+    pub(super) fn error(&mut self, text: impl Into<String>) {
+        self.messages.push(Message {
+            text: text.into(),
+            is_error: true,
+        });
+    }
+
+    fn restart(&mut self) {
+        if let Err(e) = self.controller.restart(&self.settings) {
+            self.error(e);
+        }
+    }
+
+    /// Carries out a command.
+    pub fn apply(&mut self, command: Command) {
+        match command {
+            Command::OpenScene(path) => {
+                self.controller
+                    .open_scene(path, self.settings.width, self.settings.height)
+            }
+            Command::UseRecommended => {
+                let Some(r) = self
+                    .controller
+                    .scene
+                    .as_ref()
+                    .map(|s| s.recommendation.clone())
+                else {
+                    return;
+                };
+                let mut params = ViewerSettings::defaults_of(r.integrator);
+                params.extend(r.params.clone());
+                self.settings.integrator = r.integrator.to_string();
+                self.settings.params = params;
+                self.restart();
+            }
+            Command::ShowOpenDialog => self.show_dialog(DialogPurpose::Scene),
+            Command::ShowReferenceDialog => self.show_dialog(DialogPurpose::Reference),
+            Command::LoadReference(path) => self.convergence.load_reference(path),
+            Command::SetIntegrator(name) => {
+                if integrators::find(&name).is_some() && name != self.settings.integrator {
+                    self.settings.params = ViewerSettings::defaults_of(&name);
+                    self.settings.integrator = name;
+                    self.restart();
+                }
+            }
+            Command::SetParam(name, value) => {
+                let old = self.settings.params.insert(name.clone(), value);
+                match self.controller.set_param(&self.settings, &name, value) {
+                    Ok(ParamEffect::Live | ParamEffect::Restarted) => {}
+                    Err(e) => {
+                        match old {
+                            Some(v) => self.settings.params.insert(name, v),
+                            None => self.settings.params.remove(&name),
+                        };
+                        self.error(e);
+                    }
+                }
+            }
+            Command::SetResolution(w, h) => {
+                self.settings.width = w.clamp(1, MAX_RESOLUTION);
+                self.settings.height = h.clamp(1, MAX_RESOLUTION);
+                self.restart();
+            }
+            Command::SetThreads(t) => {
+                self.settings.threads = t;
+                self.restart();
+            }
+            Command::SetSeed(s) => {
+                self.settings.seed = s;
+                self.restart();
+            }
+            Command::TogglePause => {
+                if let Some(f) = self.controller.frame() {
+                    self.controller.set_paused(f.state != RunState::Paused);
+                }
+            }
+            Command::Restart => self.restart(),
+            Command::SetExposure(ev) => self.settings.exposure = ev.clamp(-20.0, 20.0),
+            Command::SetToneCurve(c) => self.settings.tone_curve = c,
+            Command::Fit => self.viewport.fit(),
+            Command::OneToOne => {
+                if let Some(f) = self.controller.frame() {
+                    self.viewport
+                        .one_to_one(1.0, egui::vec2(f.image.width as f32, f.image.height as f32));
+                }
+            }
+            Command::SaveExr => self.save_snapshot(false),
+            Command::SavePng => self.save_snapshot(true),
+            Command::TogglePlots => self.settings.show_plots = !self.settings.show_plots,
+            Command::ToggleErrorMap => {
+                self.settings.show_error_map = !self.settings.show_error_map;
+                self.error_map.clear();
+            }
+        }
+    }
+}

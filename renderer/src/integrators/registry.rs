@@ -1,0 +1,65 @@
+//! The integrators Caustica offers, each with its name, description and parameters: the
+//! command line, the viewer and the EXR header all read this one list.
+
+use super::{Integrator, ParamSpec, ParamValues, RenderContext, bdpt, mmlt, path_tracer, ppm};
+
+pub struct IntegratorInfo {
+    pub name: &'static str,
+    pub title: &'static str,
+    pub description: &'static str,
+    pub params: &'static [ParamSpec],
+    pub create: fn(RenderContext, &ParamValues) -> Box<dyn Integrator>,
+}
+
+static REGISTRY: &[IntegratorInfo] = &[
+    IntegratorInfo {
+        name: "pt",
+        title: "Path tracer",
+        description: "Unidirectional path tracing with next-event estimation and MIS (reference).",
+        params: path_tracer::PathSettings::PARAMS,
+        create: path_tracer::create,
+    },
+    IntegratorInfo {
+        name: "bdpt",
+        title: "Bidirectional path tracer",
+        description: "Veach 1997: camera and light subpaths joined by every strategy, balance-heuristic MIS.",
+        params: bdpt::BdptSettings::PARAMS,
+        create: bdpt::create,
+    },
+    IntegratorInfo {
+        name: "mmlt",
+        title: "Multiplexed Metropolis light transport",
+        description: "Hachisuka et al. 2014: Metropolis chains over primary samples and bidirectional techniques.",
+        params: mmlt::MmltSettings::PARAMS,
+        create: mmlt::create,
+    },
+    IntegratorInfo {
+        name: "ppm",
+        title: "Progressive photon mapping",
+        description: "Hachisuka et al. 2008: hit points from one eye pass, radii shrinking per hit point.",
+        params: ppm::PhotonMappingSettings::PARAMS,
+        create: ppm::create_ppm,
+    },
+    IntegratorInfo {
+        name: "sppm",
+        title: "Stochastic progressive photon mapping",
+        description: "Hachisuka & Jensen 2009: hit points re-traced every pass, statistics per pixel.",
+        params: ppm::PhotonMappingSettings::PARAMS,
+        create: ppm::create_sppm,
+    },
+    IntegratorInfo {
+        name: "pppm",
+        title: "Probabilistic progressive photon mapping",
+        description: "Knaus & Zwicker 2011: one global radius per pass, independent passes averaged.",
+        params: ppm::PhotonMappingSettings::PARAMS,
+        create: ppm::create_pppm,
+    },
+];
+
+pub fn registry() -> &'static [IntegratorInfo] {
+    REGISTRY
+}
+
+pub fn find(name: &str) -> Option<&'static IntegratorInfo> {
+    REGISTRY.iter().find(|i| i.name == name)
+}
