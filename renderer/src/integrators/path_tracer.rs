@@ -1,8 +1,9 @@
 //! Reference path tracer (pbrt-v4 section 13.4, `PathIntegrator`): BSDF sampling plus
 //! next-event estimation, combined by multiple importance sampling with the power heuristic
 //! (Veach's thesis, section 9.2) for area and environment lights; delta lights by next-event
-//! estimation alone. Russian roulette from the second bounce on, on the throughput with the
-//! refraction eta^2 factored out (pbrt-v4 section 13.4.4).
+//! estimation alone. Russian roulette from bounce `rr_depth` on (Mitsuba's parameter of that
+//! name; by default the second bounce), on the throughput with the refraction eta^2 factored
+//! out (pbrt-v4 section 13.4.4).
 
 use crate::error_estimate::ErrorEstimate;
 use crate::film::{Film, sanitize};
@@ -24,14 +25,29 @@ use std::sync::atomic::AtomicBool;
 pub struct PathSettings {
     /// Maximum number of scattering events along a path.
     pub max_depth: u32,
+    /// The first bounce at which Russian roulette may end a path.
+    pub rr_depth: u32,
 }
 
 impl PathSettings {
-    pub const PARAMS: &'static [ParamSpec] = &[params::MAX_DEPTH];
+    pub const PARAMS: &'static [ParamSpec] = &[
+        params::MAX_DEPTH,
+        ParamSpec {
+            name: "rr_depth",
+            doc: "Bounces before Russian roulette may end a path: more spends time on long paths to spare the first bounces roulette's extra noise.",
+            default: 1.0,
+            min: 0.0,
+            max: 1024.0,
+            integer: true,
+            live: false,
+        },
+    ];
 
     pub fn from_params(p: &ParamValues) -> Self {
+        let get = |name: &str| params::param_value(Self::PARAMS, p, name);
         PathSettings {
-            max_depth: params::param_value(Self::PARAMS, p, "max_depth") as u32,
+            max_depth: get("max_depth") as u32,
+            rr_depth: get("rr_depth") as u32,
         }
     }
 }
@@ -167,7 +183,7 @@ pub fn li(
             break;
         }
         let rr_beta = beta * eta_scale;
-        if rr_beta.max_element() < 1.0 && depth >= 1 {
+        if rr_beta.max_element() < 1.0 && depth >= settings.rr_depth {
             let q = (1.0 - rr_beta.max_element()).max(0.0);
             if sampler.get_1d() < q {
                 break;
