@@ -3,12 +3,12 @@
 //! so the spread of pixel values estimates the per-pixel standard deviation.
 
 use caustica_renderer::image::Image;
-use caustica_renderer::integrators::ParamValues;
 use caustica_renderer::procedural::{emissive_sphere, sphere_with_point_light};
-use caustica_renderer::scene::{Scene, SceneDescription};
-use caustica_renderer::session::{RunState, Session, SessionConfig};
-use std::sync::Arc;
+use caustica_renderer::scene::SceneDescription;
 
+mod common;
+
+/// The path tracer's image, which must drop no sample.
 fn render(
     desc: SceneDescription,
     params: &[(&str, f64)],
@@ -16,31 +16,12 @@ fn render(
     size: u32,
     threads: usize,
 ) -> Image {
-    let scene = Arc::new(Scene::build(desc).expect("scene builds"));
-    let session = Session::start(SessionConfig {
-        scene,
-        integrator: "pt".into(),
-        params: params
-            .iter()
-            .map(|(k, v)| (k.to_string(), *v))
-            .collect::<ParamValues>(),
-        width: size,
-        height: size,
-        seed: 7,
-        threads,
-        max_passes: Some(passes),
-        time_limit: None,
-        on_frame: None,
-        target_rel_mse: None,
-    })
-    .expect("session starts");
-    let frame = session.wait();
-    assert_eq!(frame.state, RunState::Finished);
+    let (image, dropped) = common::render_on(desc, "pt", params, passes, size, 7, threads);
     assert_eq!(
-        frame.dropped, 0,
+        dropped, 0,
         "no sample may be NaN, infinite or negative here"
     );
-    Arc::try_unwrap(frame.image.clone()).unwrap_or_else(|a| (*a).clone())
+    image
 }
 
 /// Checks that every pixel's estimate of `expected` is within what its noise allows, and

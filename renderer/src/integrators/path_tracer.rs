@@ -6,10 +6,10 @@
 //! out (pbrt-v4 section 13.4.4).
 
 use crate::error_estimate::ErrorEstimate;
-use crate::film::{Film, sanitize};
+use crate::film::sanitize;
 use crate::geometry::Ray;
 use crate::image::Image;
-use crate::integrators::pixel_pass::pixel_pass;
+use crate::integrators::pixel_pass::PixelFilm;
 use crate::integrators::{
     Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext, params, scatter,
 };
@@ -61,8 +61,7 @@ impl Default for PathSettings {
 pub struct PathTracer {
     ctx: RenderContext,
     settings: PathSettings,
-    film: Film,
-    pass_buffer: Vec<Vec3>,
+    film: PixelFilm,
 }
 
 pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
@@ -71,12 +70,10 @@ pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
 
 impl PathTracer {
     pub fn new(ctx: RenderContext, settings: PathSettings) -> Self {
-        let (w, h) = (ctx.camera.width as usize, ctx.camera.height as usize);
         PathTracer {
+            film: PixelFilm::new(&ctx.camera),
             ctx,
             settings,
-            film: Film::new(w, h),
-            pass_buffer: vec![Vec3::ZERO; w * h],
         }
     }
 }
@@ -84,10 +81,7 @@ impl PathTracer {
 impl Integrator for PathTracer {
     fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let (scene, camera, settings) = (&*self.ctx.scene, &self.ctx.camera, self.settings);
-        let width = self.film.width;
-        let stats = pixel_pass(
-            &mut self.pass_buffer,
-            width,
+        self.film.render_pass(
             self.ctx.seed,
             pass,
             cancel,
@@ -100,9 +94,7 @@ impl Integrator for PathTracer {
                     Vec3::ZERO
                 })
             },
-        )?;
-        self.film.add_pass(&self.pass_buffer);
-        Ok(stats)
+        )
     }
 
     fn image(&self) -> Image {

@@ -4,11 +4,62 @@
 //! scheduling, cancellation checked per row, and splats to other pixels (BDPT's t = 1
 //! strategy) merged in row order after the rows are done.
 
+use crate::camera::PerspectiveCamera;
+use crate::error_estimate::ErrorEstimate;
+use crate::film::Film;
+use crate::image::Image;
 use crate::integrators::{Cancelled, PassStats};
 use crate::sampling::sampler::Sampler;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
+
+/// The film of an integrator that takes one sample per pixel, and the buffer each pass fills
+/// before it is added: every pass is an independent estimate of every pixel, which the film's
+/// error estimate relies on.
+pub(crate) struct PixelFilm {
+    film: Film,
+    pass_buffer: Vec<Vec3>,
+}
+
+impl PixelFilm {
+    pub fn new(camera: &PerspectiveCamera) -> Self {
+        let (w, h) = (camera.width as usize, camera.height as usize);
+        PixelFilm {
+            film: Film::new(w, h),
+            pass_buffer: vec![Vec3::ZERO; w * h],
+        }
+    }
+
+    /// One pass of `pixel_pass`, added to the film.
+    pub fn render_pass<S: Default>(
+        &mut self,
+        seed: u64,
+        pass: u64,
+        cancel: &AtomicBool,
+        sample_pixel: impl Fn(Vec2, &mut Sampler, &mut S, &mut RowOutput) -> Vec3 + Sync,
+    ) -> Result<PassStats, Cancelled> {
+        let width = self.film.width;
+        let stats = pixel_pass(
+            &mut self.pass_buffer,
+            width,
+            seed,
+            pass,
+            cancel,
+            sample_pixel,
+        )?;
+        self.film.add_pass(&self.pass_buffer);
+        Ok(stats)
+    }
+
+    pub fn image(&self) -> Image {
+        self.film.image()
+    }
+
+    pub fn error_estimate(&self) -> Option<ErrorEstimate> {
+        self.film.error_estimate()
+    }
+}
 
 /// What the samples of one row give besides their pixels' own values.
 #[derive(Default)]

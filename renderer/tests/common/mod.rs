@@ -5,7 +5,7 @@
 use caustica_renderer::image::Image;
 use caustica_renderer::integrators::ParamValues;
 use caustica_renderer::scene::{Scene, SceneDescription};
-use caustica_renderer::session::{Session, SessionConfig};
+use caustica_renderer::session::{RunState, Session, SessionConfig};
 use std::sync::Arc;
 
 /// Renders `passes` passes of `integrator` with `params` (over its defaults) at `size` x
@@ -19,6 +19,19 @@ pub fn render(
     size: u32,
     seed: u64,
 ) -> (Image, u64) {
+    render_on(desc, integrator, params, passes, size, seed, 0)
+}
+
+/// `render` on `threads` worker threads (0: one per core).
+pub fn render_on(
+    desc: SceneDescription,
+    integrator: &str,
+    params: &[(&str, f64)],
+    passes: u64,
+    size: u32,
+    seed: u64,
+    threads: usize,
+) -> (Image, u64) {
     let session = Session::start(SessionConfig {
         scene: Arc::new(Scene::build(desc).unwrap()),
         integrator: integrator.into(),
@@ -29,7 +42,7 @@ pub fn render(
         width: size,
         height: size,
         seed,
-        threads: 0,
+        threads,
         max_passes: Some(passes),
         time_limit: None,
         on_frame: None,
@@ -37,6 +50,7 @@ pub fn render(
     })
     .unwrap();
     let frame = session.wait();
+    assert_eq!(frame.state, RunState::Finished);
     assert_eq!(frame.image.count_non_finite(), 0);
     ((*frame.image).clone(), frame.dropped)
 }

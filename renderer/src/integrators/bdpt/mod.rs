@@ -17,9 +17,9 @@ pub mod vertex;
 
 use crate::camera::PerspectiveCamera;
 use crate::error_estimate::ErrorEstimate;
-use crate::film::{Film, sanitize};
+use crate::film::sanitize;
 use crate::image::Image;
-use crate::integrators::pixel_pass::{RowOutput, pixel_pass};
+use crate::integrators::pixel_pass::{PixelFilm, RowOutput};
 use crate::integrators::{
     Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext, params,
 };
@@ -58,18 +58,15 @@ pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
 pub struct Bdpt {
     ctx: RenderContext,
     settings: BdptSettings,
-    film: Film,
-    pass_buffer: Vec<Vec3>,
+    film: PixelFilm,
 }
 
 impl Bdpt {
     pub fn new(ctx: RenderContext, settings: BdptSettings) -> Self {
-        let (w, h) = (ctx.camera.width as usize, ctx.camera.height as usize);
         Bdpt {
+            film: PixelFilm::new(&ctx.camera),
             ctx,
             settings,
-            film: Film::new(w, h),
-            pass_buffer: vec![Vec3::ZERO; w * h],
         }
     }
 }
@@ -77,19 +74,14 @@ impl Bdpt {
 impl Integrator for Bdpt {
     fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let (scene, camera, settings) = (&*self.ctx.scene, &self.ctx.camera, self.settings);
-        let width = self.film.width;
-        let stats = pixel_pass(
-            &mut self.pass_buffer,
-            width,
+        self.film.render_pass(
             self.ctx.seed,
             pass,
             cancel,
             |film, sampler, paths: &mut Subpaths, row| {
                 sample_pixel(scene, camera, &settings, film, sampler, paths, row)
             },
-        )?;
-        self.film.add_pass(&self.pass_buffer);
-        Ok(stats)
+        )
     }
 
     fn image(&self) -> Image {
