@@ -237,72 +237,31 @@ pub fn cornell_box(glass: bool) -> SceneDescription {
         ..Default::default()
     };
     let v = Vec3::new;
-    let mut meshes = vec![
-        quad(
-            "floor",
-            [
-                v(-1., 0., 1.),
-                v(1., 0., 1.),
-                v(1., 0., -1.),
-                v(-1., 0., -1.),
-            ],
-            0,
-        ),
-        quad(
-            "ceiling",
-            [
-                v(-1., 2., -1.),
-                v(1., 2., -1.),
-                v(1., 2., 1.),
-                v(-1., 2., 1.),
-            ],
-            0,
-        ),
-        quad(
-            "back",
-            [
-                v(-1., 0., -1.),
-                v(1., 0., -1.),
-                v(1., 2., -1.),
-                v(-1., 2., -1.),
-            ],
-            0,
-        ),
-        quad(
-            "left",
-            [
-                v(-1., 0., 1.),
-                v(-1., 0., -1.),
-                v(-1., 2., -1.),
-                v(-1., 2., 1.),
-            ],
-            1,
-        ),
-        quad(
-            "right",
-            [v(1., 0., -1.), v(1., 0., 1.), v(1., 2., 1.), v(1., 2., -1.)],
-            2,
-        ),
-        quad(
-            "light",
-            [
-                v(-0.25, 1.98, -0.25),
-                v(0.25, 1.98, -0.25),
-                v(0.25, 1.98, 0.25),
-                v(-0.25, 1.98, 0.25),
-            ],
-            3,
-        ),
-        cuboid(
-            "tall block",
-            Affine3A::from_scale_rotation_translation(
-                v(0.6, 1.2, 0.6),
-                Quat::from_rotation_y(0.3),
-                v(-0.35, 0.6, -0.3),
-            ),
-            0,
-        ),
+    // The walls (counter-clockwise seen from inside the box) and the light: name, corners,
+    // material.
+    #[rustfmt::skip]
+    let quads: [(&str, [Vec3; 4], u32); 6] = [
+        ("floor", [v(-1., 0., 1.), v(1., 0., 1.), v(1., 0., -1.), v(-1., 0., -1.)], 0),
+        ("ceiling", [v(-1., 2., -1.), v(1., 2., -1.), v(1., 2., 1.), v(-1., 2., 1.)], 0),
+        ("back", [v(-1., 0., -1.), v(1., 0., -1.), v(1., 2., -1.), v(-1., 2., -1.)], 0),
+        ("left", [v(-1., 0., 1.), v(-1., 0., -1.), v(-1., 2., -1.), v(-1., 2., 1.)], 1),
+        ("right", [v(1., 0., -1.), v(1., 0., 1.), v(1., 2., 1.), v(1., 2., -1.)], 2),
+        ("light", [v(-0.25, 1.98, -0.25), v(0.25, 1.98, -0.25), v(0.25, 1.98, 0.25),
+                   v(-0.25, 1.98, 0.25)], 3),
     ];
+    let mut meshes: Vec<MeshDesc> = quads
+        .iter()
+        .map(|(name, corners, material)| quad(name, *corners, *material))
+        .collect();
+    meshes.push(cuboid(
+        "tall block",
+        Affine3A::from_scale_rotation_translation(
+            v(0.6, 1.2, 0.6),
+            Quat::from_rotation_y(0.3),
+            v(-0.35, 0.6, -0.3),
+        ),
+        0,
+    ));
     if glass {
         meshes.push(uv_sphere(
             "glass sphere",
