@@ -5,7 +5,7 @@ use caustica_renderer::image::read_exr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn caustica(args: &[&str]) -> Output {
+fn caustica<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_caustica"))
         .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
@@ -27,25 +27,33 @@ fn path_str(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// `caustica render SCENE -o OUT FLAGS...`
-fn render(scene: &str, out: &Path, flags: &[&str]) -> Output {
-    let mut args = vec!["render", scene, "-o", path_str(out)];
-    args.extend_from_slice(flags);
-    caustica(&args)
+/// `render`, which must succeed.
+fn render_ok(scene: &str, out: &Path, flags: &str) -> Output {
+    let o = render(scene, out, flags);
+    assert!(o.status.success(), "{}", stderr(&o));
+    o
+}
+
+/// The binary run with a command line given as one string, split at whitespace (no argument
+/// here contains any: the temporary directories are named without).
+fn run(line: &str) -> Output {
+    caustica(&line.split_whitespace().collect::<Vec<_>>())
+}
+
+/// `caustica render SCENE -o OUT FLAGS...`, the flags as one string.
+fn render(scene: &str, out: &Path, flags: &str) -> Output {
+    run(&format!("render {scene} -o {} {flags}", out.display()))
 }
 
 #[test]
 fn renders_the_cornell_box_to_exr_with_metadata() {
     let dir = temp_dir("exr");
     let out = dir.join("box.exr");
-    let o = render(
+    let o = render_ok(
         "assets/cornell-box.gltf",
         &out,
-        &[
-            "--spp", "4", "--width", "48", "--height", "32", "--seed", "9",
-        ],
+        "--spp 4 --width 48 --height 32 --seed 9",
     );
-    assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("Mrays/s"),
         "the summary gives rays per second: {}",
@@ -68,21 +76,11 @@ fn renders_the_cornell_box_to_exr_with_metadata() {
 fn renders_png_and_honours_max_depth() {
     let dir = temp_dir("png");
     let out = dir.join("glass.png");
-    let o = render(
+    render_ok(
         "assets/cornell-glass.gltf",
         &out,
-        &[
-            "--spp",
-            "2",
-            "--width",
-            "16",
-            "--height",
-            "16",
-            "--max-depth",
-            "3",
-        ],
+        "--spp 2 --width 16 --height 16 --max-depth 3",
     );
-    assert!(o.status.success(), "{}", stderr(&o));
     let png = std::fs::read(&out).unwrap();
     assert_eq!(&png[1..4], b"PNG");
     std::fs::remove_dir_all(dir).unwrap();
@@ -90,84 +88,23 @@ fn renders_png_and_honours_max_depth() {
 
 #[test]
 fn bad_arguments_exit_2_naming_the_argument() {
-    let cases: &[(&[&str], &str)] = &[
+    let render = "render assets/cornell-box.gltf -o x.exr";
+    let cases = [
         (
-            &["render", "assets/cornell-box.gltf", "-o", "x.txt"],
+            "render assets/cornell-box.gltf -o x.txt".to_string(),
             "--output",
         ),
-        (
-            &[
-                "render",
-                "assets/cornell-box.gltf",
-                "-o",
-                "x.exr",
-                "--spp",
-                "0",
-            ],
-            "--spp",
-        ),
-        (
-            &[
-                "render",
-                "assets/cornell-box.gltf",
-                "-o",
-                "x.exr",
-                "--spp",
-                "4",
-                "--time",
-                "1",
-            ],
-            "--time",
-        ),
-        (
-            &[
-                "render",
-                "assets/cornell-box.gltf",
-                "-o",
-                "x.exr",
-                "--time",
-                "-1",
-            ],
-            "--time",
-        ),
-        (
-            &[
-                "render",
-                "assets/cornell-box.gltf",
-                "-o",
-                "x.exr",
-                "--integrator",
-                "magic",
-            ],
-            "--integrator",
-        ),
-        (
-            &[
-                "render",
-                "assets/cornell-box.gltf",
-                "-o",
-                "x.exr",
-                "--width",
-                "0",
-            ],
-            "--width",
-        ),
-        (
-            &[
-                "render",
-                "assets/cornell-box.gltf",
-                "-o",
-                "x.exr",
-                "--max-depth",
-                "5000",
-            ],
-            "max_depth",
-        ),
-        (&["render", "assets/cornell-box.gltf"], "--output"),
-        (&["render", "--frobnicate"], "--frobnicate"),
+        (format!("{render} --spp 0"), "--spp"),
+        (format!("{render} --spp 4 --time 1"), "--time"),
+        (format!("{render} --time -1"), "--time"),
+        (format!("{render} --integrator magic"), "--integrator"),
+        (format!("{render} --width 0"), "--width"),
+        (format!("{render} --max-depth 5000"), "max_depth"),
+        ("render assets/cornell-box.gltf".to_string(), "--output"),
+        ("render --frobnicate".to_string(), "--frobnicate"),
     ];
-    for (args, fragment) in cases {
-        let o = caustica(args);
+    for (args, fragment) in &cases {
+        let o = run(args);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
         assert!(
             stderr(&o).contains(fragment),
@@ -181,7 +118,7 @@ fn bad_arguments_exit_2_naming_the_argument() {
 fn runtime_errors_exit_1_naming_the_file() {
     let dir = temp_dir("runtime");
     let out = dir.join("x.exr");
-    let o = caustica(&["render", "assets/no-such-scene.gltf", "-o", path_str(&out)]);
+    let o = render("assets/no-such-scene.gltf", &out, "");
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(
         stderr(&o).contains("assets/no-such-scene.gltf"),
@@ -191,18 +128,11 @@ fn runtime_errors_exit_1_naming_the_file() {
 
     let broken = dir.join("broken.gltf");
     std::fs::write(&broken, "{ not json").unwrap();
-    let o = caustica(&["render", path_str(&broken), "-o", path_str(&out)]);
+    let o = render(path_str(&broken), &out, "");
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("broken.gltf"), "{}", stderr(&o));
 
-    let o = caustica(&[
-        "render",
-        "assets/cornell-box.gltf",
-        "-o",
-        "/nonexistent-dir/x.exr",
-        "--spp",
-        "1",
-    ]);
+    let o = run("render assets/cornell-box.gltf -o /nonexistent-dir/x.exr --spp 1");
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("/nonexistent-dir"), "{}", stderr(&o));
     assert!(!out.exists(), "nothing is written on failure");
@@ -211,31 +141,16 @@ fn runtime_errors_exit_1_naming_the_file() {
 
 #[test]
 fn help_documents_every_option() {
-    let o = caustica(&["render", "--help"]);
+    let o = run("render --help");
     assert!(o.status.success());
     let help = String::from_utf8_lossy(&o.stdout);
-    for option in [
-        "--output",
-        "--integrator",
-        "--spp",
-        "--time",
-        "--width",
-        "--height",
-        "--seed",
-        "--threads",
-        "--max-depth",
-        "--alpha",
-        "--radius",
-        "--photons",
-        "--large-step",
-        "--sigma",
-        "--bootstrap",
-        "--chains",
-        "--stats",
-    ] {
+    let options = "--output --integrator --spp --time --width --height --seed --threads \
+                   --max-depth --alpha --radius --photons --large-step --sigma --bootstrap \
+                   --chains --stats";
+    for option in options.split_whitespace() {
         assert!(help.contains(option), "help lacks {option}");
     }
-    let o = caustica(&["--help"]);
+    let o = run("--help");
     assert!(o.status.success());
     let help = String::from_utf8_lossy(&o.stdout);
     for item in ["render", "[SCENE]", "--reference", "--screenshot"] {
@@ -264,31 +179,15 @@ fn the_viewer_without_a_display_fails_clearly() {
 fn mmlt_on_the_door_writes_its_technique_histogram() {
     let dir = temp_dir("mmlt");
     let (out, stats) = (dir.join("door.exr"), dir.join("door.json"));
-    let o = render(
+    render_ok(
         "assets/door.gltf",
         &out,
-        &[
-            "--integrator",
-            "mmlt",
-            "--spp",
-            "4",
-            "--width",
-            "40",
-            "--large-step",
-            "0.5",
-            "--sigma",
-            "0.02",
-            "--bootstrap",
-            "2000",
-            "--chains",
-            "50",
-            "--max-depth",
-            "5",
-            "--stats",
-            path_str(&stats),
-        ],
+        &format!(
+            "--integrator mmlt --spp 4 --width 40 --large-step 0.5 --sigma 0.02 \
+             --bootstrap 2000 --chains 50 --max-depth 5 --stats {}",
+            stats.display()
+        ),
     );
-    assert!(o.status.success(), "{}", stderr(&o));
     let (image, meta) = read_exr(&out).unwrap();
     assert_eq!(image.count_non_finite(), 0);
     assert!(image.mean_luminance() > 0.0, "light comes through the slit");
@@ -314,16 +213,15 @@ fn mmlt_on_the_door_writes_its_technique_histogram() {
     assert_eq!(counted, 4 * 50 * 32);
 
     // bdpt renders too, and an MMLT flag given to another integrator is refused.
-    let o = render(
+    render_ok(
         "assets/cornell-box.gltf",
         &dir.join("b.exr"),
-        &["--integrator", "bdpt", "--spp", "2", "--width", "24"],
+        "--integrator bdpt --spp 2 --width 24",
     );
-    assert!(o.status.success(), "{}", stderr(&o));
     let o = render(
         "assets/cornell-box.gltf",
         &dir.join("c.exr"),
-        &["--integrator", "pt", "--sigma", "0.1"],
+        "--integrator pt --sigma 0.1",
     );
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("sigma"), "{}", stderr(&o));
@@ -335,21 +233,14 @@ fn mmlt_on_the_door_writes_its_technique_histogram() {
 fn render_until_an_estimated_error_and_record_it() {
     let dir = temp_dir("until");
     let (out, stats) = (dir.join("box.exr"), dir.join("box.json"));
-    let o = render(
+    let o = render_ok(
         "assets/cornell-box.gltf",
         &out,
-        &[
-            "--width",
-            "32",
-            "--until-error",
-            "0.02",
-            "--time",
-            "30",
-            "--stats",
-            path_str(&stats),
-        ],
+        &format!(
+            "--width 32 --until-error 0.02 --time 30 --stats {}",
+            stats.display()
+        ),
     );
-    assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("is below 2e-2"), "{}", stderr(&o));
     let (_, meta) = read_exr(&out).unwrap();
     let estimated: f64 = meta["estimated_relmse"].parse().unwrap();
@@ -365,7 +256,7 @@ fn render_until_an_estimated_error_and_record_it() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     assert_eq!(json["estimated_relmse"].as_f64(), Some(estimated));
-    let o = render("assets/cornell-box.gltf", &out, &["--until-error", "-1"]);
+    let o = render("assets/cornell-box.gltf", &out, "--until-error -1");
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -377,27 +268,20 @@ fn render_until_an_estimated_error_and_record_it() {
 fn converge_measures_every_run_against_the_reference() {
     let dir = temp_dir("converge");
     let reference = dir.join("ref.exr");
-    let o = render(
+    render_ok(
         "assets/cornell-box.gltf",
         &reference,
-        &["--width", "32", "--spp", "1024", "--seed", "77"],
+        "--width 32 --spp 1024 --seed 77",
     );
-    assert!(o.status.success(), "{}", stderr(&o));
     let out = dir.join("measured");
-    let o = caustica(&[
-        "converge",
-        "assets/cornell-box.gltf",
-        "--reference",
-        path_str(&reference),
-        "--integrator",
-        "pt,sppm",
-        "--param",
-        "photons=2000,8000",
-        "--time",
-        "1.5",
-        "--out",
-        path_str(&out),
-    ]);
+    let converge = format!(
+        "converge assets/cornell-box.gltf --reference {} --out {}",
+        reference.display(),
+        out.display()
+    );
+    let o = run(&format!(
+        "{converge} --integrator pt,sppm --param photons=2000,8000 --time 1.5"
+    ));
     assert!(o.status.success(), "{}", stderr(&o));
     let stdout = String::from_utf8_lossy(&o.stdout);
     for run in ["pt", "sppm photons=2000", "sppm photons=8000"] {
@@ -408,18 +292,9 @@ fn converge_measures_every_run_against_the_reference() {
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     assert_eq!(
-        header,
-        [
-            "run",
-            "integrator",
-            "parameters",
-            "seconds",
-            "passes",
-            "rel_mse",
-            "rmse",
-            "estimated_rel_mse",
-            "estimated_bias_rel_mse"
-        ]
+        header.join(" "),
+        "run integrator parameters seconds passes rel_mse rmse estimated_rel_mse \
+         estimated_bias_rel_mse"
     );
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
@@ -443,20 +318,7 @@ fn converge_measures_every_run_against_the_reference() {
     let png = image::open(out.join("convergence.png")).unwrap();
     assert!(png.width() > 400 && png.height() > 300);
     // A reference of another size is refused before anything renders.
-    let o = caustica(&[
-        "converge",
-        "assets/cornell-box.gltf",
-        "--reference",
-        path_str(&reference),
-        "--integrator",
-        "pt",
-        "--time",
-        "1",
-        "--width",
-        "40",
-        "--out",
-        path_str(&out),
-    ]);
+    let o = run(&format!("{converge} --integrator pt --time 1 --width 40"));
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("ref.exr"), "{}", stderr(&o));
     std::fs::remove_dir_all(dir).unwrap();
@@ -471,7 +333,7 @@ fn info_recommends_and_reference_renders_with_the_recommendation() {
         ("assets/caustic-pool.gltf", "sppm", "sppm"),
         ("assets/door.gltf", "mmlt", "bdpt"),
     ] {
-        let o = caustica(&["info", scene, "--width", "64"]);
+        let o = run(&format!("info {scene} --width 64"));
         assert!(o.status.success(), "{}", stderr(&o));
         let stdout = String::from_utf8_lossy(&o.stdout);
         assert!(
@@ -489,28 +351,15 @@ fn info_recommends_and_reference_renders_with_the_recommendation() {
     }
     let dir = temp_dir("reference");
     let out = dir.join("pool.exr");
-    let o = caustica(&[
-        "reference",
-        "assets/caustic-pool.gltf",
-        "-o",
-        path_str(&out),
-        "--time",
-        "1",
-        "--width",
-        "32",
-    ]);
+    let o = run(&format!(
+        "reference assets/caustic-pool.gltf -o {} --time 1 --width 32",
+        out.display()
+    ));
     assert!(o.status.success(), "{}", stderr(&o));
     let (_, meta) = read_exr(&out).unwrap();
     assert_eq!(meta["integrator"], "sppm");
     assert!(meta["estimated_relmse"].parse::<f64>().unwrap() > 0.0);
-    let o = caustica(&[
-        "reference",
-        "assets/door.gltf",
-        "-o",
-        "x.png",
-        "--time",
-        "1",
-    ]);
+    let o = run("reference assets/door.gltf -o x.png --time 1");
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -525,19 +374,11 @@ fn merging_runs_equals_one_longer_run() {
     let dir = temp_dir("merge");
     let render_box = |name: &str, spp: u32, seed: u32| {
         let path = dir.join(name);
-        let o = render(
+        render_ok(
             "assets/cornell-box.gltf",
             &path,
-            &[
-                "--width",
-                "32",
-                "--spp",
-                &spp.to_string(),
-                "--seed",
-                &seed.to_string(),
-            ],
+            &format!("--width 32 --spp {spp} --seed {seed}"),
         );
-        assert!(o.status.success(), "{}", stderr(&o));
         path
     };
     let reference = render_box("ref.exr", 4096, 1000);
