@@ -91,57 +91,55 @@ pub fn quad(name: &str, p: [Vec3; 4], material: u32) -> MeshDesc {
     }
 }
 
+/// A horizontal rectangle at height `y` over [min.x, max.x] x [min.y, max.y] in x and z,
+/// facing up (+y) or down.
+pub fn horizontal_quad(
+    name: &str,
+    y: f32,
+    min: Vec2,
+    max: Vec2,
+    up: bool,
+    material: u32,
+) -> MeshDesc {
+    let (x0, z0, x1, z1) = (min.x, min.y, max.x, max.y);
+    let corners = if up {
+        [[x0, z1], [x1, z1], [x1, z0], [x0, z0]]
+    } else {
+        [[x0, z0], [x1, z0], [x1, z1], [x0, z1]]
+    };
+    quad(name, corners.map(|[x, z]| Vec3::new(x, y, z)), material)
+}
+
+/// Appends quad p0 p1 p2 p3 (counter-clockwise seen from its front) as two triangles.
+fn push_quad(mesh: &mut MeshDesc, p: [Vec3; 4]) {
+    let base = mesh.positions.len() as u32;
+    mesh.positions.extend_from_slice(&p);
+    mesh.indices
+        .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+}
+
 /// The unit cube [-0.5, 0.5]^3 transformed by `xf`, faces outward.
 pub fn cuboid(name: &str, xf: Affine3A, material: u32) -> MeshDesc {
-    let c = |x: f32, y: f32, z: f32| xf.transform_point3(Vec3::new(x, y, z) * 0.5);
-    let faces = [
-        [
-            c(-1., -1., 1.),
-            c(1., -1., 1.),
-            c(1., 1., 1.),
-            c(-1., 1., 1.),
-        ], // +z
-        [
-            c(1., -1., -1.),
-            c(-1., -1., -1.),
-            c(-1., 1., -1.),
-            c(1., 1., -1.),
-        ], // -z
-        [
-            c(1., -1., 1.),
-            c(1., -1., -1.),
-            c(1., 1., -1.),
-            c(1., 1., 1.),
-        ], // +x
-        [
-            c(-1., -1., -1.),
-            c(-1., -1., 1.),
-            c(-1., 1., 1.),
-            c(-1., 1., -1.),
-        ], // -x
-        [
-            c(-1., 1., 1.),
-            c(1., 1., 1.),
-            c(1., 1., -1.),
-            c(-1., 1., -1.),
-        ], // +y
-        [
-            c(-1., -1., -1.),
-            c(1., -1., -1.),
-            c(1., -1., 1.),
-            c(-1., -1., 1.),
-        ], // -y
+    // Each face's corners in units of half the edge, counter-clockwise seen from outside.
+    #[rustfmt::skip]
+    const FACES: [[[f32; 3]; 4]; 6] = [
+        [[-1., -1., 1.], [1., -1., 1.], [1., 1., 1.], [-1., 1., 1.]], // +z
+        [[1., -1., -1.], [-1., -1., -1.], [-1., 1., -1.], [1., 1., -1.]], // -z
+        [[1., -1., 1.], [1., -1., -1.], [1., 1., -1.], [1., 1., 1.]], // +x
+        [[-1., -1., -1.], [-1., -1., 1.], [-1., 1., 1.], [-1., 1., -1.]], // -x
+        [[-1., 1., 1.], [1., 1., 1.], [1., 1., -1.], [-1., 1., -1.]], // +y
+        [[-1., -1., -1.], [1., -1., -1.], [1., -1., 1.], [-1., -1., 1.]], // -y
     ];
     let mut mesh = MeshDesc {
         name: name.into(),
         material,
         ..Default::default()
     };
-    for f in faces {
-        let base = mesh.positions.len() as u32;
-        mesh.positions.extend_from_slice(&f);
-        mesh.indices
-            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    for face in FACES {
+        push_quad(
+            &mut mesh,
+            face.map(|c| xf.transform_point3(Vec3::from(c) * 0.5)),
+        );
     }
     mesh
 }
@@ -155,21 +153,19 @@ pub fn camera_looking(from: Vec3, to: Vec3, yfov_degrees: f32) -> CameraDesc {
     }
 }
 
+/// The unit sphere about the origin, facing inward, with material 0: the enclosure of the
+/// closed-form scenes.
+fn enclosing_unit_sphere(segments: u32) -> MeshDesc {
+    uv_sphere("sphere", Vec3::ZERO, 1.0, segments, segments / 2, true, 0)
+}
+
 /// Closed form: inside a sphere of radius 1 and diffuse albedo 0.5, a point light of intensity
 /// pi at the centre. Direct irradiance is pi everywhere, and the enclosure's interreflection
 /// gives L = rho E / (pi (1 - rho)) = 1 in every direction.
 pub fn sphere_with_point_light(segments: u32) -> SceneDescription {
     SceneDescription {
         name: "sphere-point-light".into(),
-        meshes: vec![uv_sphere(
-            "sphere",
-            Vec3::ZERO,
-            1.0,
-            segments,
-            segments / 2,
-            true,
-            0,
-        )],
+        meshes: vec![enclosing_unit_sphere(segments)],
         materials: vec![Material::diffuse(Vec3::splat(0.5))],
         lights: vec![PunctualLightDesc::Point {
             position: Vec3::ZERO,
@@ -183,19 +179,10 @@ pub fn sphere_with_point_light(segments: u32) -> SceneDescription {
 /// Closed form: inside a closed sphere that emits `le` and reflects diffusely with albedo
 /// `rho`, radiance is le / (1 - rho) everywhere (the Neumann series of a uniform enclosure).
 pub fn emissive_sphere(le: f32, rho: f32, segments: u32) -> SceneDescription {
-    let mut m = Material::diffuse(Vec3::splat(rho));
-    m.emission = Vec3::splat(le);
+    let m = Material::emitter(Vec3::splat(le), Vec3::splat(rho));
     SceneDescription {
         name: "emissive-sphere".into(),
-        meshes: vec![uv_sphere(
-            "sphere",
-            Vec3::ZERO,
-            1.0,
-            segments,
-            segments / 2,
-            true,
-            0,
-        )],
+        meshes: vec![enclosing_unit_sphere(segments)],
         materials: vec![m],
         camera: Some(camera_looking(
             Vec3::new(0.1, 0.2, 0.3),
@@ -210,32 +197,11 @@ pub fn emissive_sphere(le: f32, rho: f32, segments: u32) -> SceneDescription {
 /// area light under the ceiling, and two blocks; with `glass`, a smooth glass sphere (ior 1.5)
 /// stands in place of the short block and throws a caustic on the floor.
 pub fn cornell_box(glass: bool) -> SceneDescription {
-    let white = Material {
-        name: "white".into(),
-        ..Material::diffuse(Vec3::new(0.725, 0.71, 0.68))
-    };
-    let red = Material {
-        name: "red".into(),
-        ..Material::diffuse(Vec3::new(0.63, 0.065, 0.05))
-    };
-    let green = Material {
-        name: "green".into(),
-        ..Material::diffuse(Vec3::new(0.14, 0.45, 0.091))
-    };
-    let light = Material {
-        name: "light".into(),
-        emission: Vec3::new(17.0, 12.0, 4.0),
-        ..Material::diffuse(Vec3::splat(0.78))
-    };
-    let glass_material = Material {
-        name: "glass".into(),
-        base_color: Vec3::ONE,
-        metallic: 0.0,
-        roughness: 0.0,
-        transmission: 1.0,
-        ior: 1.5,
-        ..Default::default()
-    };
+    let white = Material::diffuse(Vec3::new(0.725, 0.71, 0.68)).named("white");
+    let red = Material::diffuse(Vec3::new(0.63, 0.065, 0.05)).named("red");
+    let green = Material::diffuse(Vec3::new(0.14, 0.45, 0.091)).named("green");
+    let light = Material::emitter(Vec3::new(17.0, 12.0, 4.0), Vec3::splat(0.78)).named("light");
+    let glass_material = Material::glass(1.5).named("glass");
     let v = Vec3::new;
     // The walls (counter-clockwise seen from inside the box) and the light: name, corners,
     // material.
@@ -344,6 +310,7 @@ fn rippled_slab(name: &str, half: f32, bottom: f32, top: f32, n: u32, material: 
         ..Default::default()
     };
     let mut normals = Vec::new();
+    let v = Vec3::new;
     let coord = |i: u32| -half + 2.0 * half * i as f32 / n as f32;
     // Top height field, counter-clockwise seen from above.
     for j in 0..=n {
@@ -366,64 +333,34 @@ fn rippled_slab(name: &str, half: f32, bottom: f32, top: f32, n: u32, material: 
         }
     }
     // Bottom and sides, flat-shaded: their vertices carry their face normal.
-    let mut face = |p: [Vec3; 4], normal: Vec3| {
-        let base = mesh.positions.len() as u32;
-        mesh.positions.extend_from_slice(&p);
-        normals.extend_from_slice(&[normal; 4]);
-        mesh.indices
-            .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
-    };
     let h = half;
-    face(
-        [
-            Vec3::new(-h, bottom, -h),
-            Vec3::new(h, bottom, -h),
-            Vec3::new(h, bottom, h),
-            Vec3::new(-h, bottom, h),
-        ],
-        Vec3::NEG_Y,
-    );
+    let bottom_face = [
+        v(-h, bottom, -h),
+        v(h, bottom, -h),
+        v(h, bottom, h),
+        v(-h, bottom, h),
+    ];
+    push_quad(&mut mesh, bottom_face);
+    normals.extend_from_slice(&[Vec3::NEG_Y; 4]);
+    let top_at = |(x, z): (f32, f32)| Vec3::new(x, top + ripple(x, z), z);
     for i in 0..n {
-        let (x0, x1) = (coord(i), coord(i + 1));
-        let top_at = |x: f32, z: f32| Vec3::new(x, top + ripple(x, z), z);
-        // Front (+z) and back (-z) strips.
-        face(
-            [
-                Vec3::new(x0, bottom, h),
-                Vec3::new(x1, bottom, h),
-                top_at(x1, h),
-                top_at(x0, h),
-            ],
-            Vec3::Z,
-        );
-        face(
-            [
-                Vec3::new(x1, bottom, -h),
-                Vec3::new(x0, bottom, -h),
-                top_at(x0, -h),
-                top_at(x1, -h),
-            ],
-            Vec3::NEG_Z,
-        );
-        // Right (+x) and left (-x) strips.
-        face(
-            [
-                Vec3::new(h, bottom, x1),
-                Vec3::new(h, bottom, x0),
-                top_at(h, x0),
-                top_at(h, x1),
-            ],
-            Vec3::X,
-        );
-        face(
-            [
-                Vec3::new(-h, bottom, x0),
-                Vec3::new(-h, bottom, x1),
-                top_at(-h, x1),
-                top_at(-h, x0),
-            ],
-            Vec3::NEG_X,
-        );
+        let (a, b) = (coord(i), coord(i + 1));
+        // Each side's strip from one (x, z) on the rim to the next, walked so that it faces out.
+        for (from, to, normal) in [
+            ((a, h), (b, h), Vec3::Z),
+            ((b, -h), (a, -h), Vec3::NEG_Z),
+            ((h, b), (h, a), Vec3::X),
+            ((-h, a), (-h, b), Vec3::NEG_X),
+        ] {
+            let strip = [
+                v(from.0, bottom, from.1),
+                v(to.0, bottom, to.1),
+                top_at(to),
+                top_at(from),
+            ];
+            push_quad(&mut mesh, strip);
+            normals.extend_from_slice(&[normal; 4]);
+        }
     }
     mesh.normals = Some(normals);
     mesh
@@ -432,42 +369,22 @@ fn rippled_slab(name: &str, half: f32, bottom: f32, top: f32, n: u32, material: 
 /// Light reaching the camera mostly through specular surfaces: a small, bright light above a
 /// slab of rippled glass over a diffuse floor, which the glass covers with caustics.
 pub fn caustic_pool() -> SceneDescription {
-    let floor = Material {
-        name: "floor".into(),
-        ..Material::diffuse(Vec3::new(0.8, 0.78, 0.72))
-    };
-    let glass = Material {
-        name: "rippled glass".into(),
-        metallic: 0.0,
-        roughness: 0.0,
-        transmission: 1.0,
-        ior: 1.5,
-        ..Default::default()
-    };
-    let light = Material {
-        name: "light".into(),
-        emission: Vec3::new(60.0, 55.0, 45.0),
-        ..Material::diffuse(Vec3::ZERO)
-    };
+    let floor = Material::diffuse(Vec3::new(0.8, 0.78, 0.72)).named("floor");
+    let glass = Material::glass(1.5).named("rippled glass");
+    let light = Material::emitter(Vec3::new(60.0, 55.0, 45.0), Vec3::ZERO).named("light");
     let v = Vec3::new;
     let s = 3.0;
     SceneDescription {
         name: "caustic-pool".into(),
         meshes: vec![
-            quad(
-                "floor",
-                [v(-s, 0., s), v(s, 0., s), v(s, 0., -s), v(-s, 0., -s)],
-                0,
-            ),
+            horizontal_quad("floor", 0.0, Vec2::splat(-s), Vec2::splat(s), true, 0),
             rippled_slab("glass", 1.2, 0.35, 0.6, 64, 1),
-            quad(
+            horizontal_quad(
                 "light",
-                [
-                    v(-0.15, 2.6, -0.15),
-                    v(0.15, 2.6, -0.15),
-                    v(0.15, 2.6, 0.15),
-                    v(-0.15, 2.6, 0.15),
-                ],
+                2.6,
+                Vec2::splat(-0.15),
+                Vec2::splat(0.15),
+                false,
                 2,
             ),
         ],
@@ -485,33 +402,12 @@ pub fn caustic_pool() -> SceneDescription {
 /// and then hit the far ceiling by chance, so its image is mostly noise, while Metropolis
 /// chains keep the paths that pass the slit once they have found them.
 pub fn door() -> SceneDescription {
-    let white = Material {
-        name: "wall".into(),
-        ..Material::diffuse(Vec3::new(0.7, 0.7, 0.68))
-    };
-    let floor = Material {
-        name: "glossy floor".into(),
-        base_color: Vec3::new(0.55, 0.45, 0.35),
-        metallic: 0.0,
-        roughness: 0.3,
-        ..Default::default()
-    };
-    let metal = Material {
-        name: "glossy metal".into(),
-        base_color: Vec3::new(0.9, 0.85, 0.7),
-        metallic: 1.0,
-        roughness: 0.2,
-        ..Default::default()
-    };
-    let door_material = Material {
-        name: "door".into(),
-        ..Material::diffuse(Vec3::new(0.45, 0.3, 0.2))
-    };
-    let light = Material {
-        name: "light".into(),
-        emission: Vec3::new(2500.0, 2250.0, 1875.0),
-        ..Material::diffuse(Vec3::ZERO)
-    };
+    let white = Material::diffuse(Vec3::new(0.7, 0.7, 0.68)).named("wall");
+    let floor = Material::metallic_roughness(Vec3::new(0.55, 0.45, 0.35), 0.0, 0.3);
+    let metal = Material::metallic_roughness(Vec3::new(0.9, 0.85, 0.7), 1.0, 0.2);
+    let (floor, metal) = (floor.named("glossy floor"), metal.named("glossy metal"));
+    let door_material = Material::diffuse(Vec3::new(0.45, 0.3, 0.2)).named("door");
+    let light = Material::emitter(Vec3::new(2500.0, 2250.0, 1875.0), Vec3::ZERO).named("light");
     let v = Vec3::new;
     // An axis-aligned slab from `lo` to `hi`.
     let slab = |name: &str, lo: Vec3, hi: Vec3, material: u32| {
@@ -547,14 +443,12 @@ pub fn door() -> SceneDescription {
             0,
         ),
         // The uplight faces the far room's ceiling.
-        quad(
+        horizontal_quad(
             "light",
-            [
-                v(3.8, 2.0, 0.4),
-                v(4.6, 2.0, 0.4),
-                v(4.6, 2.0, -0.4),
-                v(3.8, 2.0, -0.4),
-            ],
+            2.0,
+            Vec2::new(3.8, -0.4),
+            Vec2::new(4.6, 0.4),
+            true,
             4,
         ),
     ];

@@ -168,6 +168,41 @@ impl Material {
         }
     }
 
+    /// glTF's metallic-roughness model with constant factors.
+    pub fn metallic_roughness(base_color: Vec3, metallic: f32, roughness: f32) -> Material {
+        Material {
+            base_color,
+            metallic,
+            roughness,
+            ..Default::default()
+        }
+    }
+
+    /// Smooth, clear glass (KHR_materials_transmission at 1) of index of refraction `ior`.
+    pub fn glass(ior: f32) -> Material {
+        Material {
+            transmission: 1.0,
+            ior,
+            ..Material::metallic_roughness(Vec3::ONE, 0.0, 0.0)
+        }
+    }
+
+    /// A diffuse emitter of radiance `emission` that reflects with albedo `albedo`.
+    pub fn emitter(emission: Vec3, albedo: Vec3) -> Material {
+        Material {
+            emission,
+            ..Material::diffuse(albedo)
+        }
+    }
+
+    /// The same material under `name`.
+    pub fn named(self, name: &str) -> Material {
+        Material {
+            name: name.into(),
+            ..self
+        }
+    }
+
     pub fn kind(&self) -> MaterialKind {
         let factors_only = self.metallic_roughness_texture.is_none();
         if factors_only && self.transmission > 0.0 && self.roughness == 0.0 && self.metallic == 0.0
