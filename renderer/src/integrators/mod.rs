@@ -9,7 +9,7 @@ pub mod bdpt;
 pub mod mmlt;
 pub mod params;
 pub mod path_tracer;
-mod pixel_pass;
+pub mod pixel_pass;
 pub mod ppm;
 pub mod registry;
 mod scatter;

@@ -5,21 +5,16 @@
 //! name; by default the second bounce), on the throughput with the refraction eta^2 factored
 //! out (pbrt-v4 section 13.4.4).
 
-use crate::error_estimate::ErrorEstimate;
 use crate::film::sanitize;
 use crate::geometry::Ray;
-use crate::image::Image;
-use crate::integrators::pixel_pass::PixelFilm;
-use crate::integrators::{
-    Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext, params, scatter,
-};
+use crate::integrators::pixel_pass::{PixelEstimator, PixelIntegrator, Row};
+use crate::integrators::{Integrator, ParamSpec, ParamValues, RenderContext, params, scatter};
 use crate::light::Light;
 use crate::material::{Bsdf, TransportMode};
 use crate::sampling::sampler::Sampler;
 use crate::sampling::warp::power_heuristic;
 use crate::scene::{Scene, SurfaceInteraction};
-use glam::Vec3;
-use std::sync::atomic::AtomicBool;
+use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathSettings {
@@ -58,51 +53,24 @@ impl Default for PathSettings {
     }
 }
 
-pub struct PathTracer {
-    ctx: RenderContext,
-    settings: PathSettings,
-    film: PixelFilm,
-}
+/// The path tracer: one path per pixel sample.
+pub type PathTracer = PixelIntegrator<PathSettings>;
 
 pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
     Box::new(PathTracer::new(ctx, PathSettings::from_params(params)))
 }
 
-impl PathTracer {
-    pub fn new(ctx: RenderContext, settings: PathSettings) -> Self {
-        PathTracer {
-            film: PixelFilm::new(&ctx.camera),
-            ctx,
-            settings,
-        }
-    }
-}
+impl PixelEstimator for PathSettings {
+    type Scratch = ();
 
-impl Integrator for PathTracer {
-    fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
-        let (scene, camera, settings) = (&*self.ctx.scene, &self.ctx.camera, self.settings);
-        self.film.render_pass(
-            self.ctx.seed,
-            pass,
-            cancel,
-            |film, sampler, _: &mut (), row| {
-                let ray = camera.generate_ray(film);
-                let l = li(scene, ray, sampler, &settings, &mut row.stats.rays);
-                row.stats.samples += 1;
-                sanitize(l).unwrap_or_else(|| {
-                    row.stats.dropped += 1;
-                    Vec3::ZERO
-                })
-            },
-        )
-    }
-
-    fn image(&self) -> Image {
-        self.film.image()
-    }
-
-    fn error_estimate(&self) -> Option<ErrorEstimate> {
-        self.film.error_estimate()
+    fn sample_pixel(&self, ctx: &RenderContext, film: Vec2, row: &mut Row<()>) -> Vec3 {
+        let ray = ctx.camera.generate_ray(film);
+        let l = li(&ctx.scene, ray, &mut row.sampler, self, &mut row.stats.rays);
+        row.stats.samples += 1;
+        sanitize(l).unwrap_or_else(|| {
+            row.stats.dropped += 1;
+            Vec3::ZERO
+        })
     }
 }
 

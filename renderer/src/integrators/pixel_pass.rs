@@ -4,66 +4,79 @@
 //! scheduling, cancellation checked per row, and splats to other pixels (BDPT's t = 1
 //! strategy) merged in row order after the rows are done.
 
-use crate::camera::PerspectiveCamera;
 use crate::error_estimate::ErrorEstimate;
 use crate::film::Film;
 use crate::image::Image;
-use crate::integrators::{Cancelled, PassStats};
+use crate::integrators::{Cancelled, Integrator, PassStats, RenderContext};
 use crate::sampling::sampler::Sampler;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// The film of an integrator that takes one sample per pixel, and the buffer each pass fills
-/// before it is added: every pass is an independent estimate of every pixel, which the film's
-/// error estimate relies on.
-pub(crate) struct PixelFilm {
+/// What an integrator that takes one sample per pixel and pass computes for each sample
+/// (pbrt-v4's `RayIntegrator::Li`, given the whole film position so that BDPT can build its
+/// camera subpath and splat its t = 1 strategies).
+pub trait PixelEstimator: Send + Sync {
+    /// Buffers reused from pixel to pixel of a row (path vertices).
+    type Scratch: Default + Send;
+
+    /// The value of one sample at film position `film`, drawing from `row.sampler`: counts
+    /// it (and any estimate it dropped) in `row.stats` and pushes contributions to other
+    /// pixels to `row.splats`.
+    fn sample_pixel(&self, ctx: &RenderContext, film: Vec2, row: &mut Row<Self::Scratch>) -> Vec3;
+}
+
+/// An integrator that takes one sample per pixel and pass with estimator `E` (the path
+/// tracer, BDPT): its film and the buffer each pass fills before it is added. Every pass is
+/// an independent estimate of every pixel, which the film's error estimate relies on.
+pub struct PixelIntegrator<E> {
+    ctx: RenderContext,
+    estimator: E,
     film: Film,
     pass_buffer: Vec<Vec3>,
 }
 
-impl PixelFilm {
-    pub fn new(camera: &PerspectiveCamera) -> Self {
-        let (w, h) = (camera.width as usize, camera.height as usize);
-        PixelFilm {
+impl<E: PixelEstimator> PixelIntegrator<E> {
+    pub fn new(ctx: RenderContext, estimator: E) -> Self {
+        let (w, h) = (ctx.camera.width as usize, ctx.camera.height as usize);
+        PixelIntegrator {
+            ctx,
+            estimator,
             film: Film::new(w, h),
             pass_buffer: vec![Vec3::ZERO; w * h],
         }
     }
+}
 
-    /// One pass of `pixel_pass`, added to the film.
-    pub fn render_pass<S: Default>(
-        &mut self,
-        seed: u64,
-        pass: u64,
-        cancel: &AtomicBool,
-        sample_pixel: impl Fn(Vec2, &mut Sampler, &mut S, &mut RowOutput) -> Vec3 + Sync,
-    ) -> Result<PassStats, Cancelled> {
-        let width = self.film.width;
+impl<E: PixelEstimator> Integrator for PixelIntegrator<E> {
+    fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
+        let (ctx, estimator) = (&self.ctx, &self.estimator);
         let stats = pixel_pass(
             &mut self.pass_buffer,
-            width,
-            seed,
+            self.film.width,
+            ctx.seed,
             pass,
             cancel,
-            sample_pixel,
+            |film, row: &mut Row<E::Scratch>| estimator.sample_pixel(ctx, film, row),
         )?;
         self.film.add_pass(&self.pass_buffer);
         Ok(stats)
     }
 
-    pub fn image(&self) -> Image {
+    fn image(&self) -> Image {
         self.film.image()
     }
 
-    pub fn error_estimate(&self) -> Option<ErrorEstimate> {
+    fn error_estimate(&self) -> Option<ErrorEstimate> {
         self.film.error_estimate()
     }
 }
 
-/// What the samples of one row give besides their pixels' own values.
-#[derive(Default)]
-pub(crate) struct RowOutput {
+/// The state of the image row being sampled: its sampler, the estimator's scratch buffers,
+/// and what its samples give besides their pixels' own values.
+pub struct Row<S> {
+    pub sampler: Sampler,
+    pub scratch: S,
     pub stats: PassStats,
     /// Contributions to other pixels: (pixel index, value).
     pub splats: Vec<(usize, Vec3)>,
@@ -74,30 +87,35 @@ pub(crate) struct RowOutput {
 /// corner plus the sampler's first 2D draw) and returns the pixel's value; `scratch` is
 /// reused from pixel to pixel of a row (path vertex buffers). Splats are added to `buffer`
 /// after every row is done, in row order.
-pub(crate) fn pixel_pass<S: Default>(
+fn pixel_pass<S: Default + Send>(
     buffer: &mut [Vec3],
     width: usize,
     seed: u64,
     pass: u64,
     cancel: &AtomicBool,
-    sample_pixel: impl Fn(Vec2, &mut Sampler, &mut S, &mut RowOutput) -> Vec3 + Sync,
+    sample_pixel: impl Fn(Vec2, &mut Row<S>) -> Vec3 + Sync,
 ) -> Result<PassStats, Cancelled> {
-    let rows: Vec<RowOutput> = buffer
+    let rows: Vec<Row<S>> = buffer
         .par_chunks_mut(width.max(1))
         .enumerate()
         .map(|(y, row)| {
             if cancel.load(Ordering::Relaxed) {
                 return Err(Cancelled);
             }
-            let mut sampler = Sampler::new(seed);
-            let mut scratch = S::default();
-            let mut output = RowOutput::default();
+            let mut state = Row {
+                sampler: Sampler::new(seed),
+                scratch: S::default(),
+                stats: PassStats::default(),
+                splats: Vec::new(),
+            };
             for (x, out) in row.iter_mut().enumerate() {
-                sampler.start_pixel_sample((y * width + x) as u64, pass);
-                let film = Vec2::new(x as f32, y as f32) + sampler.get_2d();
-                *out = sample_pixel(film, &mut sampler, &mut scratch, &mut output);
+                state
+                    .sampler
+                    .start_pixel_sample((y * width + x) as u64, pass);
+                let film = Vec2::new(x as f32, y as f32) + state.sampler.get_2d();
+                *out = sample_pixel(film, &mut state);
             }
-            Ok(output)
+            Ok(state)
         })
         .collect::<Result<_, _>>()?;
     let mut stats = PassStats::default();

@@ -15,19 +15,11 @@ pub mod connect;
 pub mod subpath;
 pub mod vertex;
 
-use crate::camera::PerspectiveCamera;
-use crate::error_estimate::ErrorEstimate;
 use crate::film::sanitize;
-use crate::image::Image;
-use crate::integrators::pixel_pass::{PixelFilm, RowOutput};
-use crate::integrators::{
-    Cancelled, Integrator, ParamSpec, ParamValues, PassStats, RenderContext, params,
-};
-use crate::sampling::sampler::Sampler;
-use crate::scene::Scene;
+use crate::integrators::pixel_pass::{PixelEstimator, PixelIntegrator, Row};
+use crate::integrators::{Integrator, ParamSpec, ParamValues, RenderContext, params};
 use connect::connect;
 use glam::{Vec2, Vec3};
-use std::sync::atomic::AtomicBool;
 use subpath::{Termination, camera_subpath, light_subpath};
 use vertex::Vertex;
 
@@ -55,115 +47,82 @@ pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
     Box::new(Bdpt::new(ctx, BdptSettings::from_params(params)))
 }
 
-pub struct Bdpt {
-    ctx: RenderContext,
-    settings: BdptSettings,
-    film: PixelFilm,
-}
-
-impl Bdpt {
-    pub fn new(ctx: RenderContext, settings: BdptSettings) -> Self {
-        Bdpt {
-            film: PixelFilm::new(&ctx.camera),
-            ctx,
-            settings,
-        }
-    }
-}
-
-impl Integrator for Bdpt {
-    fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
-        let (scene, camera, settings) = (&*self.ctx.scene, &self.ctx.camera, self.settings);
-        self.film.render_pass(
-            self.ctx.seed,
-            pass,
-            cancel,
-            |film, sampler, paths: &mut Subpaths, row| {
-                sample_pixel(scene, camera, &settings, film, sampler, paths, row)
-            },
-        )
-    }
-
-    fn image(&self) -> Image {
-        self.film.image()
-    }
-
-    fn error_estimate(&self) -> Option<ErrorEstimate> {
-        self.film.error_estimate()
-    }
-}
+/// Bidirectional path tracing: one camera and one light subpath per pixel sample.
+pub type Bdpt = PixelIntegrator<BdptSettings>;
 
 /// A row's camera and light subpath buffers, reused from pixel to pixel.
 type Subpaths = (Vec<Vertex>, Vec<Vertex>);
 
-/// One pixel sample: a camera and a light subpath joined by every strategy; returns the
-/// pixel's own value and splats the t = 1 strategies' into `row`.
-fn sample_pixel(
-    scene: &Scene,
-    camera: &PerspectiveCamera,
-    settings: &BdptSettings,
-    film: Vec2,
-    sampler: &mut Sampler,
-    (camera_path, light_path): &mut Subpaths,
-    row: &mut RowOutput,
-) -> Vec3 {
-    let max_depth = settings.max_depth as usize;
-    let width = camera.width as usize;
-    let st = &mut row.stats;
-    camera_subpath(
-        scene,
-        camera,
-        film,
-        sampler,
-        max_depth + 2,
-        Termination::Roulette,
-        &mut st.rays,
-        camera_path,
-    );
-    light_subpath(
-        scene,
-        sampler,
-        max_depth + 1,
-        Termination::Roulette,
-        &mut st.rays,
-        light_path,
-    );
-    let mut l = Vec3::ZERO;
-    for t in 1..=camera_path.len() {
-        for s in 0..=light_path.len() {
-            let depth = (s + t) as i64 - 2;
-            if (s == 1 && t == 1) || depth < 0 || depth > max_depth as i64 {
-                continue;
-            }
-            if settings.only_strategy.is_some_and(|o| o != (s, t)) {
-                continue;
-            }
-            let Some(c) = connect(
-                scene,
-                camera,
-                light_path,
-                camera_path,
-                s,
-                t,
-                sampler,
-                &mut st.rays,
-                settings.only_strategy.is_none(),
-            ) else {
-                continue;
-            };
-            let Some(v) = sanitize(c.l * c.mis) else {
-                st.dropped += 1;
-                continue;
-            };
-            match c.raster {
-                Some(r) => {
-                    let (px, py) = (r.x as usize, r.y as usize);
-                    row.splats.push((py * width + px, v));
+impl PixelEstimator for BdptSettings {
+    type Scratch = Subpaths;
+
+    /// One pixel sample: a camera and a light subpath joined by every strategy; returns the
+    /// pixel's own value and splats the t = 1 strategies' into `row`.
+    fn sample_pixel(&self, ctx: &RenderContext, film: Vec2, row: &mut Row<Subpaths>) -> Vec3 {
+        let (scene, camera) = (&*ctx.scene, &ctx.camera);
+        let max_depth = self.max_depth as usize;
+        let width = camera.width as usize;
+        let Row {
+            sampler,
+            scratch: (camera_path, light_path),
+            stats: st,
+            splats,
+        } = row;
+        camera_subpath(
+            scene,
+            camera,
+            film,
+            sampler,
+            max_depth + 2,
+            Termination::Roulette,
+            &mut st.rays,
+            camera_path,
+        );
+        light_subpath(
+            scene,
+            sampler,
+            max_depth + 1,
+            Termination::Roulette,
+            &mut st.rays,
+            light_path,
+        );
+        let mut l = Vec3::ZERO;
+        for t in 1..=camera_path.len() {
+            for s in 0..=light_path.len() {
+                let depth = (s + t) as i64 - 2;
+                if (s == 1 && t == 1) || depth < 0 || depth > max_depth as i64 {
+                    continue;
                 }
-                None => l += v,
+                if self.only_strategy.is_some_and(|o| o != (s, t)) {
+                    continue;
+                }
+                let Some(c) = connect(
+                    scene,
+                    camera,
+                    light_path,
+                    camera_path,
+                    s,
+                    t,
+                    sampler,
+                    &mut st.rays,
+                    self.only_strategy.is_none(),
+                ) else {
+                    continue;
+                };
+                let Some(v) = sanitize(c.l * c.mis) else {
+                    st.dropped += 1;
+                    continue;
+                };
+                match c.raster {
+                    Some(r) => {
+                        let (px, py) = (r.x as usize, r.y as usize);
+                        splats.push((py * width + px, v));
+                    }
+                    None => l += v,
+                }
             }
         }
+        st.samples += 1;
+        l
     }
-    st.samples += 1;
-    l
 }
