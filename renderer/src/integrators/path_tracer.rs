@@ -16,7 +16,7 @@ use crate::sampling::warp::power_heuristic;
 use crate::scene::{Scene, SurfaceInteraction};
 use glam::{Vec2, Vec3};
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 pub struct PathSettings {
     /// Maximum number of scattering events along a path.
     pub max_depth: u32,
@@ -27,23 +27,17 @@ pub struct PathSettings {
 impl PathSettings {
     pub const PARAMS: &'static [ParamSpec] = &[
         params::MAX_DEPTH,
-        ParamSpec {
-            name: "rr_depth",
-            doc: "Bounces before Russian roulette may end a path: more spends time on long paths to spare the first bounces roulette's extra noise.",
-            default: 1.0,
-            min: 0.0,
-            max: 1024.0,
-            integer: true,
-            live: false,
-        },
+        ParamSpec::new(
+            "rr_depth",
+            "Bounces before Russian roulette may end a path: more spends time on long paths to spare the first bounces roulette's extra noise.",
+            1.0,
+            (0.0, 1024.0),
+        )
+        .integer(),
     ];
 
     pub fn from_params(p: &ParamValues) -> Self {
-        let get = |name: &str| params::param_value(Self::PARAMS, p, name);
-        PathSettings {
-            max_depth: get("max_depth") as u32,
-            rr_depth: get("rr_depth") as u32,
-        }
+        params::read_settings(Self::PARAMS, p)
     }
 }
 

@@ -20,15 +20,16 @@ use crate::integrators::pixel_pass::{PixelEstimator, PixelIntegrator, Row};
 use crate::integrators::{Integrator, ParamSpec, ParamValues, RenderContext, params};
 use connect::connect;
 use glam::{Vec2, Vec3};
-use subpath::{Termination, camera_subpath, light_subpath};
+use subpath::{Termination, Walker};
 use vertex::Vertex;
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 pub struct BdptSettings {
     /// Maximum number of bounces (s + t - 2) of a path.
     pub max_depth: u32,
     /// Evaluate only strategy (s, t), unweighted: for testing that each strategy alone
     /// converges to the same image (how MIS bugs are found).
+    #[serde(skip)]
     pub only_strategy: Option<(usize, usize)>,
 }
 
@@ -36,10 +37,7 @@ impl BdptSettings {
     pub const PARAMS: &'static [ParamSpec] = &[params::MAX_DEPTH];
 
     pub fn from_params(p: &ParamValues) -> Self {
-        BdptSettings {
-            max_depth: params::param_value(Self::PARAMS, p, "max_depth") as u32,
-            only_strategy: None,
-        }
+        params::read_settings(Self::PARAMS, p)
     }
 }
 
@@ -68,24 +66,14 @@ impl PixelEstimator for BdptSettings {
             stats: st,
             splats,
         } = row;
-        camera_subpath(
-            scene,
-            camera,
-            film,
-            sampler,
-            max_depth + 2,
-            Termination::Roulette,
-            &mut st.rays,
-            camera_path,
-        );
-        light_subpath(
+        let mut walker = Walker {
             scene,
             sampler,
-            max_depth + 1,
-            Termination::Roulette,
-            &mut st.rays,
-            light_path,
-        );
+            termination: Termination::Roulette,
+            rays: &mut st.rays,
+        };
+        walker.camera_subpath(camera, film, max_depth + 2, camera_path);
+        walker.light_subpath(max_depth + 1, light_path);
         let mut l = Vec3::ZERO;
         for t in 1..=camera_path.len() {
             for s in 0..=light_path.len() {

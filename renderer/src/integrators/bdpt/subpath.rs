@@ -20,157 +20,136 @@ pub enum Termination {
     Fixed,
 }
 
-/// A camera subpath of at most `max_vertices` vertices through film position `film`.
-#[allow(clippy::too_many_arguments)]
-pub fn camera_subpath(
-    scene: &Scene,
-    camera: &PerspectiveCamera,
-    film: Vec2,
-    sampler: &mut impl SampleSource,
-    max_vertices: usize,
-    termination: Termination,
-    rays: &mut u64,
-    path: &mut Vec<Vertex>,
-) {
-    path.clear();
-    if max_vertices == 0 {
-        return;
-    }
-    let ray = camera.generate_ray(film);
-    // W_e cos / (pdf_pos pdf_dir) = 1 for the pinhole with a uniform film sample.
-    path.push(Vertex::camera(ray.o, Vec3::ONE));
-    let pdf_dir = camera.pdf_we_dir(ray.d);
-    random_walk(
-        scene,
-        ray,
-        sampler,
-        Vec3::ONE,
-        pdf_dir,
-        max_vertices,
-        TransportMode::Radiance,
-        termination,
-        rays,
-        path,
-    );
+/// What the walks of one path sample share: the scene, the sample source, how walks end and
+/// the count of rays they trace.
+pub struct Walker<'a, S> {
+    pub scene: &'a Scene,
+    pub sampler: &'a mut S,
+    pub termination: Termination,
+    pub rays: &'a mut u64,
 }
 
-/// A light subpath of at most `max_vertices` vertices from a light chosen by power.
-pub fn light_subpath(
-    scene: &Scene,
-    sampler: &mut impl SampleSource,
-    max_vertices: usize,
-    termination: Termination,
-    rays: &mut u64,
-    path: &mut Vec<Vertex>,
-) {
-    path.clear();
-    if max_vertices == 0 {
-        return;
+impl<S: SampleSource> Walker<'_, S> {
+    /// A camera subpath of at most `max_vertices` (at least 1) vertices through film
+    /// position `film`.
+    pub fn camera_subpath(
+        &mut self,
+        camera: &PerspectiveCamera,
+        film: Vec2,
+        max_vertices: usize,
+        path: &mut Vec<Vertex>,
+    ) {
+        debug_assert!(
+            max_vertices > 0,
+            "a camera subpath holds at least the camera"
+        );
+        path.clear();
+        let ray = camera.generate_ray(film);
+        // W_e cos / (pdf_pos pdf_dir) = 1 for the pinhole with a uniform film sample.
+        path.push(Vertex::camera(ray.o, Vec3::ONE));
+        let pdf_dir = camera.pdf_we_dir(ray.d);
+        let start = (Vec3::ONE, pdf_dir);
+        self.random_walk(ray, start, max_vertices, TransportMode::Radiance, path);
     }
-    let ul = sampler.get_1d();
-    let (u_pos, u_dir, u_side) = (sampler.get_2d(), sampler.get_2d(), sampler.get_1d());
-    let Some((index, pmf)) = scene.light_sampler.sample(ul) else {
-        return;
-    };
-    let Some(e) = sample_le(scene, &scene.lights[index], u_pos, u_dir, u_side) else {
-        return;
-    };
-    if !(e.pdf_pos > 0.0 && e.pdf_dir > 0.0 && pmf > 0.0) {
-        return;
-    }
-    path.push(Vertex::light(
-        Some(index),
-        e.ray.o,
-        e.n,
-        e.le,
-        e.pdf_pos * pmf,
-    ));
-    let beta = e.flux() / pmf;
-    random_walk(
-        scene,
-        e.ray,
-        sampler,
-        beta,
-        e.pdf_dir,
-        max_vertices,
-        TransportMode::Importance,
-        termination,
-        rays,
-        path,
-    );
-    if scene.lights[index].is_infinite() {
-        // The first surface's density is the disc's area density projected onto it, and the
-        // light's own is directional (pbrt-v3 section 16.3.2).
-        if path.len() > 1 {
-            let cos = if path[1].is_on_surface() {
-                path[1].ng.dot(e.ray.d).abs()
-            } else {
-                1.0
-            };
-            path[1].pdf_fwd = e.pdf_pos * cos;
+
+    /// A light subpath of at most `max_vertices` vertices from a light chosen by power.
+    pub fn light_subpath(&mut self, max_vertices: usize, path: &mut Vec<Vertex>) {
+        path.clear();
+        if max_vertices == 0 {
+            return;
         }
-        path[0].pdf_fwd = infinite_light_density(scene);
-    }
-}
-
-/// Extends `path` (which holds the subpath's first vertex) until it has `max_vertices`.
-#[allow(clippy::too_many_arguments)]
-fn random_walk(
-    scene: &Scene,
-    mut ray: crate::geometry::Ray,
-    sampler: &mut impl SampleSource,
-    mut beta: Vec3,
-    pdf_dir: f32,
-    max_vertices: usize,
-    mode: TransportMode,
-    termination: Termination,
-    rays: &mut u64,
-    path: &mut Vec<Vertex>,
-) {
-    let mut pdf_fwd = pdf_dir;
-    while path.len() < max_vertices {
-        *rays += 1;
-        let Some(si) = scene.intersect(&ray) else {
-            // A camera ray that escapes reaches the environment: a light vertex at infinity.
-            if mode == TransportMode::Radiance && scene.environment.is_some() {
-                path.push(Vertex::light(None, ray.o + ray.d, -ray.d, beta, pdf_fwd));
+        let (scene, sampler) = (self.scene, &mut *self.sampler);
+        let ul = sampler.get_1d();
+        let (u_pos, u_dir, u_side) = (sampler.get_2d(), sampler.get_2d(), sampler.get_1d());
+        let Some((index, pmf)) = scene.light_sampler.sample(ul) else {
+            return;
+        };
+        let Some(e) = sample_le(scene, &scene.lights[index], u_pos, u_dir, u_side) else {
+            return;
+        };
+        if !(e.pdf_pos > 0.0 && e.pdf_dir > 0.0 && pmf > 0.0) {
+            return;
+        }
+        path.push(Vertex::light(
+            Some(index),
+            e.ray.o,
+            e.n,
+            e.le,
+            e.pdf_pos * pmf,
+        ));
+        let start = (e.flux() / pmf, e.pdf_dir);
+        self.random_walk(e.ray, start, max_vertices, TransportMode::Importance, path);
+        if scene.lights[index].is_infinite() {
+            // The first surface's density is the disc's area density projected onto it, and the
+            // light's own is directional (pbrt-v3 section 16.3.2).
+            if path.len() > 1 {
+                let cos = if path[1].is_on_surface() {
+                    path[1].ng.dot(e.ray.d).abs()
+                } else {
+                    1.0
+                };
+                path[1].pdf_fwd = e.pdf_pos * cos;
             }
-            return;
-        };
-        let bsdf = scene.bsdf(&si);
-        let mut vertex = Vertex::surface(si, bsdf, beta);
-        let prev = path.last().expect("a subpath starts with its endpoint");
-        vertex.pdf_fwd = prev.convert_density(pdf_fwd, &vertex, scene);
-        path.push(vertex);
-        if path.len() >= max_vertices {
-            return;
+            path[0].pdf_fwd = infinite_light_density(scene);
         }
-        let wo = si.shading.to_local(si.wo);
-        let Some(next) = scatter(&si, &bsdf, wo, sampler, mode) else {
-            return;
-        };
-        pdf_fwd = next.sample.pdf;
-        let mut pdf_rev = bsdf.pdf(next.sample.wi, wo);
-        let n = path.len();
-        if next.sample.is_delta {
-            path[n - 1].delta = true;
-            pdf_fwd = 0.0;
-            pdf_rev = 0.0;
-        }
-        let mut weight = next.weight;
-        if termination == Termination::Roulette && n >= 3 {
-            let survive = weight.max_element().min(1.0);
-            if !(sampler.get_1d() < survive) {
+    }
+
+    /// Extends `path` (which holds the subpath's first vertex) until it has `max_vertices`,
+    /// starting with throughput and direction density `(beta, pdf_dir)` along `ray`.
+    fn random_walk(
+        &mut self,
+        mut ray: crate::geometry::Ray,
+        (mut beta, pdf_dir): (Vec3, f32),
+        max_vertices: usize,
+        mode: TransportMode,
+        path: &mut Vec<Vertex>,
+    ) {
+        let (scene, sampler) = (self.scene, &mut *self.sampler);
+        let mut pdf_fwd = pdf_dir;
+        while path.len() < max_vertices {
+            *self.rays += 1;
+            let Some(si) = scene.intersect(&ray) else {
+                // A camera ray that escapes reaches the environment: a light vertex at infinity.
+                if mode == TransportMode::Radiance && scene.environment.is_some() {
+                    path.push(Vertex::light(None, ray.o + ray.d, -ray.d, beta, pdf_fwd));
+                }
+                return;
+            };
+            let bsdf = scene.bsdf(&si);
+            let mut vertex = Vertex::surface(si, bsdf, beta);
+            let prev = path.last().expect("a subpath starts with its endpoint");
+            vertex.pdf_fwd = prev.convert_density(pdf_fwd, &vertex, scene);
+            path.push(vertex);
+            if path.len() >= max_vertices {
                 return;
             }
-            weight /= survive;
+            let wo = si.shading.to_local(si.wo);
+            let Some(next) = scatter(&si, &bsdf, wo, sampler, mode) else {
+                return;
+            };
+            pdf_fwd = next.sample.pdf;
+            let mut pdf_rev = bsdf.pdf(next.sample.wi, wo);
+            let n = path.len();
+            if next.sample.is_delta {
+                path[n - 1].delta = true;
+                pdf_fwd = 0.0;
+                pdf_rev = 0.0;
+            }
+            let mut weight = next.weight;
+            if self.termination == Termination::Roulette && n >= 3 {
+                let survive = weight.max_element().min(1.0);
+                if !(sampler.get_1d() < survive) {
+                    return;
+                }
+                weight /= survive;
+            }
+            beta *= weight;
+            if !beta.is_finite() || beta == Vec3::ZERO {
+                return;
+            }
+            let (head, tail) = path.split_at_mut(n - 1);
+            head[n - 2].pdf_rev = tail[0].convert_density(pdf_rev, &head[n - 2], scene);
+            ray = next.ray;
         }
-        beta *= weight;
-        if !beta.is_finite() || beta == Vec3::ZERO {
-            return;
-        }
-        let (head, tail) = path.split_at_mut(n - 1);
-        head[n - 2].pdf_rev = tail[0].convert_density(pdf_rev, &head[n - 2], scene);
-        ray = next.ray;
     }
 }

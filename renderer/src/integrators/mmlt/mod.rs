@@ -52,8 +52,9 @@ use path_sample::Subpaths;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 pub struct MmltSettings {
+    #[serde(rename = "large_step")]
     pub large_step_prob: f64,
     pub sigma: f64,
     /// Bootstrap samples per path length.
@@ -65,62 +66,45 @@ pub struct MmltSettings {
 
 impl MmltSettings {
     pub const PARAMS: &'static [ParamSpec] = &[
-        ParamSpec {
-            name: "large_step",
-            doc: "Probability of a large step (every coordinate drawn anew). 1 is an independent sampler; 0 is valid but chains can stick.",
-            default: 0.3,
-            min: 0.0,
-            max: 1.0,
-            integer: false,
-            live: true,
-        },
-        ParamSpec {
-            name: "sigma",
-            doc: "Standard deviation of a small step in primary sample space (Kelemen et al. 2002).",
-            default: 0.01,
-            min: 1e-5,
-            max: 1.0,
-            integer: false,
-            live: true,
-        },
-        ParamSpec {
-            name: "bootstrap",
-            doc: "Independent samples per path length that estimate the normalisation and seed the chains.",
-            default: 100_000.0,
-            min: 1.0,
-            max: 1e8,
-            integer: true,
-            live: false,
-        },
-        ParamSpec {
-            name: "chains",
-            doc: "Number of Markov chains.",
-            default: 1000.0,
-            min: 1.0,
-            max: 1e6,
-            integer: true,
-            live: false,
-        },
-        ParamSpec {
-            name: "max_depth",
-            doc: "Longest path, in bounces; each length has its own chains.",
-            default: 10.0,
-            min: 0.0,
-            max: 64.0,
-            integer: true,
-            live: false,
-        },
+        ParamSpec::new(
+            "large_step",
+            "Probability of a large step (every coordinate drawn anew). 1 is an independent sampler; 0 is valid but chains can stick.",
+            0.3,
+            (0.0, 1.0),
+        )
+        .live(),
+        ParamSpec::new(
+            "sigma",
+            "Standard deviation of a small step in primary sample space (Kelemen et al. 2002).",
+            0.01,
+            (1e-5, 1.0),
+        )
+        .live(),
+        ParamSpec::new(
+            "bootstrap",
+            "Independent samples per path length that estimate the normalisation and seed the chains.",
+            100_000.0,
+            (1.0, 1e8),
+        )
+        .integer(),
+        ParamSpec::new(
+            "chains",
+            "Number of Markov chains.",
+            1000.0,
+            (1.0, 1e6),
+        )
+        .integer(),
+        ParamSpec::new(
+            "max_depth",
+            "Longest path, in bounces; each length has its own chains.",
+            10.0,
+            (0.0, 64.0),
+        )
+        .integer(),
     ];
 
     pub fn from_params(p: &ParamValues) -> Self {
-        let get = |name: &str| crate::integrators::param_value(Self::PARAMS, p, name);
-        MmltSettings {
-            large_step_prob: get("large_step"),
-            sigma: get("sigma"),
-            bootstrap: get("bootstrap") as u64,
-            chains: get("chains") as u64,
-            max_depth: get("max_depth") as u32,
-        }
+        crate::integrators::params::read_settings(Self::PARAMS, p)
     }
 }
 

@@ -12,7 +12,7 @@
 use crate::camera::PerspectiveCamera;
 use crate::geometry::luminance;
 use crate::integrators::bdpt::connect::connect;
-use crate::integrators::bdpt::subpath::{Termination, camera_subpath, light_subpath};
+use crate::integrators::bdpt::subpath::{Termination, Walker};
 use crate::integrators::bdpt::vertex::Vertex;
 use crate::sampling::pss::{CAMERA_STREAM, CONNECTION_STREAM, LIGHT_STREAM, PssSampler};
 use crate::sampling::sampler::SampleSource;
@@ -120,28 +120,18 @@ pub fn evaluate(
         l: Vec3::ZERO,
         raster: film,
     };
-    camera_subpath(
+    let mut walker = Walker {
         scene,
-        camera,
-        film,
         sampler,
-        t,
-        Termination::Fixed,
+        termination: Termination::Fixed,
         rays,
-        &mut scratch.camera,
-    );
+    };
+    walker.camera_subpath(camera, film, t, &mut scratch.camera);
     if scratch.camera.len() != t {
         return zero;
     }
-    sampler.start_stream(LIGHT_STREAM, 0);
-    light_subpath(
-        scene,
-        sampler,
-        s,
-        Termination::Fixed,
-        rays,
-        &mut scratch.light,
-    );
+    walker.sampler.start_stream(LIGHT_STREAM, 0);
+    walker.light_subpath(s, &mut scratch.light);
     if scratch.light.len() != s {
         return zero;
     }

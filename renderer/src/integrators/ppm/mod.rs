@@ -72,7 +72,7 @@ enum Radii {
     Global { radius_sq: f64 },
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 pub struct PhotonMappingSettings {
     pub alpha: f64,
     /// Initial radius in scene units; 0 chooses it automatically (see `auto_radius`).
@@ -83,52 +83,38 @@ pub struct PhotonMappingSettings {
 
 impl PhotonMappingSettings {
     pub const PARAMS: &'static [ParamSpec] = &[
-        ParamSpec {
-            name: "alpha",
-            doc: "Share of new photons kept per pass (0, 1]: smaller shrinks the radius faster (less bias, more noise); 1 never shrinks it.",
-            default: 2.0 / 3.0,
-            min: 1e-3,
-            max: 1.0,
-            integer: false,
-            live: true,
-        },
-        ParamSpec {
-            name: "radius",
-            doc: "Initial gather radius in scene units; 0 picks four pixel footprints at the median distance of the surfaces the camera sees.",
-            default: 0.0,
-            min: 0.0,
-            max: 1e6,
-            integer: false,
-            live: false,
-        },
-        ParamSpec {
-            name: "photons",
-            doc: "Photons traced per pass.",
-            default: 100_000.0,
-            min: 1.0,
-            max: 1e7,
-            integer: true,
-            live: true,
-        },
-        ParamSpec {
-            name: "max_depth",
-            doc: "Maximum bounces of eye paths (through specular surfaces) and of photon paths; Russian roulette ends most photons earlier.",
-            default: 64.0,
-            min: 1.0,
-            max: 1024.0,
-            integer: true,
-            live: false,
-        },
+        ParamSpec::new(
+            "alpha",
+            "Share of new photons kept per pass (0, 1]: smaller shrinks the radius faster (less bias, more noise); 1 never shrinks it.",
+            2.0 / 3.0,
+            (1e-3, 1.0),
+        )
+        .live(),
+        ParamSpec::new(
+            "radius",
+            "Initial gather radius in scene units; 0 picks four pixel footprints at the median distance of the surfaces the camera sees.",
+            0.0,
+            (0.0, 1e6),
+        ),
+        ParamSpec::new(
+            "photons",
+            "Photons traced per pass.",
+            100_000.0,
+            (1.0, 1e7),
+        )
+        .integer()
+        .live(),
+        ParamSpec::new(
+            "max_depth",
+            "Maximum bounces of eye paths (through specular surfaces) and of photon paths; Russian roulette ends most photons earlier.",
+            64.0,
+            (1.0, 1024.0),
+        )
+        .integer(),
     ];
 
     pub fn from_params(p: &ParamValues) -> Self {
-        let get = |name: &str| crate::integrators::param_value(Self::PARAMS, p, name);
-        PhotonMappingSettings {
-            alpha: get("alpha"),
-            radius: get("radius"),
-            photons: get("photons") as u64,
-            max_depth: get("max_depth") as u32,
-        }
+        crate::integrators::params::read_settings(Self::PARAMS, p)
     }
 }
 
