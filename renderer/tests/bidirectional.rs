@@ -87,7 +87,7 @@ fn bdpt_reproduces_the_closed_forms() {
         ("point-lit sphere", sphere_with_point_light(64)),
         ("emissive sphere", emissive_sphere(0.2, 0.8, 64)),
     ] {
-        let (img, dropped) = render(desc, "bdpt", &[], 64, 24, 1);
+        let (img, dropped) = render(desc, "bdpt", &[], 64, 24, 1, 0);
         assert_eq!(dropped, 0);
         let m = mean(&img);
         assert!((m - 1.0).abs() < 0.01, "{name}: mean {m}, exact 1");
@@ -238,7 +238,7 @@ fn mmlt_reproduces_the_closed_forms_at_every_extreme_of_its_parameters() {
             vec![("sigma", 1e-5)],
             vec![("sigma", 1.0)],
         ] {
-            let (img, dropped) = render(desc.clone(), "mmlt", &mmlt_params(&extra), 64, 16, 1);
+            let (img, dropped) = render(desc.clone(), "mmlt", &mmlt_params(&extra), 64, 16, 1, 0);
             assert_eq!(dropped, 0);
             let m = mean(&img);
             assert!(
@@ -262,7 +262,7 @@ fn block_means_over_seeds(
     let per_row = size as usize / block;
     let runs: Vec<Vec<f64>> = seeds
         .map(|seed| {
-            let (img, _) = render(desc.clone(), integrator, params, passes, size, seed);
+            let (img, _) = render(desc.clone(), integrator, params, passes, size, seed, 0);
             let mut blocks = vec![0.0; per_row * per_row];
             for (i, p) in img.pixels.iter().enumerate() {
                 let (x, y) = (i % size as usize / block, i / size as usize / block);

@@ -16,7 +16,7 @@ fn render(
     size: u32,
     threads: usize,
 ) -> Image {
-    let (image, dropped) = common::render_on(desc, "pt", params, passes, size, 7, threads);
+    let (image, dropped) = common::render(desc, "pt", params, passes, size, 7, threads);
     assert_eq!(
         dropped, 0,
         "no sample may be NaN, infinite or negative here"

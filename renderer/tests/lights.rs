@@ -40,7 +40,7 @@ fn render_mean(desc: SceneDescription, passes: u64) -> Vec<(&'static str, (f64, 
     ["pt", "bdpt"]
         .into_iter()
         .map(|integrator| {
-            let (image, dropped) = render(desc.clone(), integrator, &[], passes, 32, 3);
+            let (image, dropped) = render(desc.clone(), integrator, &[], passes, 32, 3, 0);
             assert_eq!(dropped, 0);
             let v: Vec<f64> = image.pixels.iter().map(|p| p.x as f64).collect();
             let n = v.len() as f64;

@@ -17,7 +17,7 @@ fn render(
     passes: u64,
     size: u32,
 ) -> (Image, u64) {
-    common::render(desc, integrator, params, passes, size, 11)
+    common::render(desc, integrator, params, passes, size, 11, 0)
 }
 
 /// Every variant reproduces a uniform closed form. Half of the radiance in the point-lit

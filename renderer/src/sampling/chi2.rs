@@ -105,6 +105,13 @@ pub fn test_directions(
     chi2_test(name, &observed, &expected, significance)
 }
 
+/// Pearson's chi-square test that `counts` are draws from equally likely bins.
+pub fn chi2_uniform(name: &str, counts: &[u32], significance: f64) -> Result<(), String> {
+    let observed: Vec<f64> = counts.iter().map(|&c| c as f64).collect();
+    let expected = observed.iter().sum::<f64>() / counts.len() as f64;
+    chi2_test(name, &observed, &vec![expected; counts.len()], significance)
+}
+
 /// Pearson's chi-square test with pooling of low-expectation cells (pbrt-v4's `Chi2Test`).
 pub fn chi2_test(
     name: &str,
@@ -119,7 +126,7 @@ pub fn chi2_test(
         .zip(observed.iter().copied())
         .collect();
     cells.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let (mut pooled_e, mut pooled_o, mut pooled_n) = (0.0, 0.0, 0usize);
+    let (mut pooled_e, mut pooled_o) = (0.0, 0.0);
     let (mut chsq, mut dof) = (0.0, 0usize);
     for &(e, o) in &cells {
         if e <= 0.0 {
@@ -131,18 +138,14 @@ pub fn chi2_test(
         } else if e < MIN_EXPECTED {
             pooled_e += e;
             pooled_o += o;
-            pooled_n += 1;
         } else {
             chsq += (o - e) * (o - e) / e;
             dof += 1;
         }
     }
-    if pooled_e > 0.0 || pooled_o > 0.0 {
-        if pooled_e > 0.0 {
-            chsq += (pooled_o - pooled_e) * (pooled_o - pooled_e) / pooled_e;
-            dof += 1;
-        }
-        let _ = pooled_n;
+    if pooled_e > 0.0 {
+        chsq += (pooled_o - pooled_e) * (pooled_o - pooled_e) / pooled_e;
+        dof += 1;
     }
     if dof < 2 {
         return Err(format!("{name}: too few degrees of freedom ({dof})"));

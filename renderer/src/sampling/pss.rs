@@ -243,11 +243,6 @@ mod tests {
             }
             counts[(x * bins as f32) as usize] += 1;
         }
-        let expected = chains as f64 / bins as f64;
-        let chi2: f64 = counts
-            .iter()
-            .map(|&c| (c as f64 - expected).powi(2) / expected)
-            .sum();
-        assert!(chi2 < 43.8, "chi2 = {chi2}");
+        crate::sampling::chi2::chi2_uniform("pss coordinates", &counts, 0.001).unwrap();
     }
 }

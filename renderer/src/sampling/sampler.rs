@@ -96,12 +96,6 @@ mod tests {
             assert!((0.0..1.0).contains(&x));
             counts[(x * bins as f32) as usize] += 1;
         }
-        // Chi-square with 15 degrees of freedom; 37.7 is the 0.001 quantile.
-        let expected = n as f64 / bins as f64;
-        let chi2: f64 = counts
-            .iter()
-            .map(|&c| (c as f64 - expected).powi(2) / expected)
-            .sum();
-        assert!(chi2 < 37.7, "chi2 = {chi2}");
+        crate::sampling::chi2::chi2_uniform("sampler", &counts, 0.001).unwrap();
     }
 }

@@ -9,21 +9,9 @@ use caustica_renderer::session::{RunState, Session, SessionConfig};
 use std::sync::Arc;
 
 /// Renders `passes` passes of `integrator` with `params` (over its defaults) at `size` x
-/// `size` on every core, and returns the image (checked free of NaN and Inf) and the count of
-/// samples dropped at their source.
+/// `size` on `threads` worker threads (0: one per core), and returns the image (checked free
+/// of NaN and Inf) and the count of samples dropped at their source.
 pub fn render(
-    desc: SceneDescription,
-    integrator: &str,
-    params: &[(&str, f64)],
-    passes: u64,
-    size: u32,
-    seed: u64,
-) -> (Image, u64) {
-    render_on(desc, integrator, params, passes, size, seed, 0)
-}
-
-/// `render` on `threads` worker threads (0: one per core).
-pub fn render_on(
     desc: SceneDescription,
     integrator: &str,
     params: &[(&str, f64)],
