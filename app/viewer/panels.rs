@@ -177,25 +177,16 @@ fn render_section(
     }
     ui.horizontal(|ui| {
         let (mut w, mut h) = (settings.width, settings.height);
-        let rw = ui
-            .add(
-                egui::DragValue::new(&mut w)
-                    .range(1..=MAX_RESOLUTION)
-                    .suffix(" px"),
-            )
-            .on_hover_text("width (restarts)");
+        let pixels = |ui: &mut egui::Ui, value: &mut u32, what: &str| {
+            let drag = egui::DragValue::new(value).range(1..=MAX_RESOLUTION);
+            let r = ui.add(drag.suffix(" px"));
+            commit_value(&r.on_hover_text(format!("{what} (restarts)")), false)
+        };
+        let width_done = pixels(ui, &mut w, "width");
         ui.label("×");
-        let rh = ui
-            .add(
-                egui::DragValue::new(&mut h)
-                    .range(1..=MAX_RESOLUTION)
-                    .suffix(" px"),
-            )
-            .on_hover_text("height (restarts)");
+        let height_done = pixels(ui, &mut h, "height");
         ui.label(RichText::new("restarts").weak());
-        if (commit_value(&rw, false) || commit_value(&rh, false))
-            && (w, h) != (settings.width, settings.height)
-        {
+        if (width_done || height_done) && (w, h) != (settings.width, settings.height) {
             out.push(Command::SetResolution(w, h));
         }
     });

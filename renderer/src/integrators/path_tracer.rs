@@ -169,14 +169,7 @@ pub(crate) fn sample_direct(
         return Vec3::ZERO;
     };
     let ctx = si.light_context();
-    let sample = match &scene.lights[index] {
-        Light::Area(a) => a.sample_li(&scene.textures, &ctx, u),
-        Light::Point(p) => p.sample_li(&ctx),
-        Light::Spot(s) => s.sample_li(&ctx),
-        Light::Directional(d) => d.sample_li(&ctx),
-        Light::Environment(e) => e.sample_li(&ctx, u),
-    };
-    let Some(ls) = sample else {
+    let Some(ls) = scene.lights[index].sample_li(&scene.textures, &ctx, u) else {
         return Vec3::ZERO;
     };
     if !(ls.pdf > 0.0) || ls.l == Vec3::ZERO {

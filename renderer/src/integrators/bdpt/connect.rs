@@ -7,7 +7,7 @@
 use crate::camera::PerspectiveCamera;
 use crate::geometry::Ray;
 use crate::integrators::bdpt::vertex::{Vertex, VertexKind};
-use crate::light::{Light, LightSampleContext};
+use crate::light::LightSampleContext;
 use crate::material::TransportMode;
 use crate::sampling::sampler::SampleSource;
 use crate::scene::Scene;
@@ -74,13 +74,7 @@ pub fn connect(
         let u = sampler.get_2d();
         let (index, pmf) = scene.light_sampler.sample(ul)?;
         let ctx: LightSampleContext = si.light_context();
-        let ls = match &scene.lights[index] {
-            Light::Area(a) => a.sample_li(&scene.textures, &ctx, u),
-            Light::Point(p) => p.sample_li(&ctx),
-            Light::Spot(sp) => sp.sample_li(&ctx),
-            Light::Directional(d) => d.sample_li(&ctx),
-            Light::Environment(e) => e.sample_li(&ctx, u),
-        }?;
+        let ls = scene.lights[index].sample_li(&scene.textures, &ctx, u)?;
         if !(ls.pdf > 0.0) || ls.l == Vec3::ZERO {
             return None;
         }
