@@ -163,18 +163,10 @@ pub(crate) fn sample_direct(
     rays: &mut u64,
     mis: bool,
 ) -> Vec3 {
-    let ul = sampler.get_1d();
-    let u = sampler.get_2d();
-    let Some((index, pmf)) = scene.light_sampler.sample(ul) else {
+    let (ul, u) = (sampler.get_1d(), sampler.get_2d());
+    let Some((_, pmf, ls)) = scene.sample_light(si, ul, u) else {
         return Vec3::ZERO;
     };
-    let ctx = si.light_context();
-    let Some(ls) = scene.lights[index].sample_li(&scene.textures, &ctx, u) else {
-        return Vec3::ZERO;
-    };
-    if !(ls.pdf > 0.0) || ls.l == Vec3::ZERO {
-        return Vec3::ZERO;
-    }
     let wi = si.shading.to_local(ls.wi);
     let f = bsdf.f(wo, wi, TransportMode::Radiance) * wi.z.abs();
     if f == Vec3::ZERO || !si.consistent(wo, wi, ls.wi) {

@@ -10,8 +10,7 @@ pub mod environment;
 pub mod punctual;
 pub mod sampler;
 
-use crate::texture::Texture;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 /// The point lit: position with its error bound and geometric normal (zero for a point in
 /// space), so shadow rays start outside the surface.
@@ -54,22 +53,5 @@ impl Light {
 
     pub fn is_infinite(&self) -> bool {
         matches!(self, Light::Directional(_) | Light::Environment(_))
-    }
-
-    /// Incident radiance at `ctx` from a point on the light drawn with `u` (delta lights
-    /// ignore it); `textures` are the scene's, for emissive textures.
-    pub fn sample_li(
-        &self,
-        textures: &[Texture],
-        ctx: &LightSampleContext,
-        u: Vec2,
-    ) -> Option<LightLiSample> {
-        match self {
-            Light::Area(a) => a.sample_li(textures, ctx, u),
-            Light::Point(p) => p.sample_li(ctx),
-            Light::Spot(s) => s.sample_li(ctx),
-            Light::Directional(d) => d.sample_li(ctx),
-            Light::Environment(e) => e.sample_li(ctx, u),
-        }
     }
 }

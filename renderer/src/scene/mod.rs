@@ -12,7 +12,7 @@ use crate::camera::CameraDesc;
 use crate::geometry::{Bounds3, Frame, Ray, interpolate2, interpolate3, offset_ray_origin};
 use crate::light::area::AreaLight;
 use crate::light::sampler::PowerLightSampler;
-use crate::light::{Light, LightSampleContext};
+use crate::light::{Light, LightLiSample, LightSampleContext};
 use crate::material::{Bsdf, Material};
 use crate::texture::Texture;
 use accel::Accel;
@@ -263,6 +263,28 @@ impl Scene {
             Some(Light::Area(a)) => Some((l as usize, a)),
             _ => None,
         }
+    }
+
+    /// Next-event estimation's light sample for the point `si` (pbrt-v4 section 13.4.3): a
+    /// light chosen by power with `ul`, a point on it drawn with `u` (delta lights ignore
+    /// it). Gives the light's index, the probability it was chosen and the sample, when the
+    /// sample carries radiance with a positive density.
+    pub fn sample_light(
+        &self,
+        si: &SurfaceInteraction,
+        ul: f32,
+        u: Vec2,
+    ) -> Option<(usize, f32, LightLiSample)> {
+        let (index, pmf) = self.light_sampler.sample(ul)?;
+        let ctx = si.light_context();
+        let ls = match &self.lights[index] {
+            Light::Area(a) => a.sample_li(&self.textures, &ctx, u),
+            Light::Point(p) => p.sample_li(&ctx),
+            Light::Spot(s) => s.sample_li(&ctx),
+            Light::Directional(d) => d.sample_li(&ctx),
+            Light::Environment(e) => e.sample_li(&ctx, u),
+        }?;
+        (ls.pdf > 0.0 && ls.l != Vec3::ZERO).then_some((index, pmf, ls))
     }
 
     /// Radiance emitted by the surface at `si` towards `w`.

@@ -7,7 +7,6 @@
 use crate::camera::PerspectiveCamera;
 use crate::geometry::Ray;
 use crate::integrators::bdpt::vertex::{Vertex, VertexKind};
-use crate::light::LightSampleContext;
 use crate::material::TransportMode;
 use crate::sampling::sampler::SampleSource;
 use crate::scene::Scene;
@@ -70,14 +69,8 @@ pub fn connect(
             return None;
         }
         let si = pt.si.as_ref()?;
-        let ul = sampler.get_1d();
-        let u = sampler.get_2d();
-        let (index, pmf) = scene.light_sampler.sample(ul)?;
-        let ctx: LightSampleContext = si.light_context();
-        let ls = scene.lights[index].sample_li(&scene.textures, &ctx, u)?;
-        if !(ls.pdf > 0.0) || ls.l == Vec3::ZERO {
-            return None;
-        }
+        let (ul, u) = (sampler.get_1d(), sampler.get_2d());
+        let (index, pmf, ls) = scene.sample_light(si, ul, u)?;
         let mut light = Vertex::light(
             Some(index),
             ls.p_light,
