@@ -48,6 +48,16 @@ fn step_until(h: &mut Harness<'static, ViewerApp>, what: &str, done: impl Fn(&Vi
     }
 }
 
+/// Moves the slider labelled `label` to `value` (as assistive technology would) and lets the
+/// UI apply it.
+fn set_slider(h: &mut Harness<'static, ViewerApp>, label: &str, value: f64) {
+    h.query_all_by_label(label)
+        .next()
+        .unwrap_or_else(|| panic!("the {label} slider"))
+        .set_value_accesskit(value);
+    h.run_steps(2);
+}
+
 fn rendering(app: &ViewerApp) -> bool {
     app.controller.frame().is_some_and(|f| f.passes >= 2)
 }
@@ -59,11 +69,7 @@ fn the_panel_drives_the_session_live_or_by_restart() {
     let sessions = h.state().controller.sessions_started;
 
     // Exposure is a display setting: it changes at once and the render goes on.
-    h.query_all_by_label("exposure (EV)")
-        .next()
-        .expect("the exposure slider")
-        .set_value_accesskit(2.0);
-    h.run_steps(2);
+    set_slider(&mut h, "exposure (EV)", 2.0);
     assert_eq!(h.state().settings.exposure, 2.0);
     assert_eq!(
         h.state().controller.sessions_started,
@@ -72,12 +78,7 @@ fn the_panel_drives_the_session_live_or_by_restart() {
     );
 
     // Max depth invalidates the estimate: the session restarts with the new value.
-    let depth = h
-        .query_all_by_label("max_depth")
-        .next()
-        .expect("the max_depth slider");
-    depth.set_value_accesskit(3.0);
-    h.run_steps(2);
+    set_slider(&mut h, "max_depth", 3.0);
     assert_eq!(
         h.state().controller.sessions_started,
         sessions + 1,
@@ -474,11 +475,7 @@ fn photon_mapping_in_the_viewer_with_live_alpha_radius_plot_and_inspector() {
     let sessions = h.state().controller.sessions_started;
 
     // alpha is live: the slider changes the running session's parameter without a restart.
-    h.query_all_by_label("alpha")
-        .next()
-        .expect("the alpha slider")
-        .set_value_accesskit(0.5);
-    h.run_steps(2);
+    set_slider(&mut h, "alpha", 0.5);
     assert_eq!(
         h.state().controller.sessions_started,
         sessions,
@@ -532,11 +529,7 @@ fn mmlt_in_the_viewer_with_live_large_step_histogram_and_warning() {
 
     // p_large is live: moving it to 0 changes the running chains without a restart, the
     // histogram keeps changing, and the panel warns that chains can stick.
-    h.query_all_by_label("large_step")
-        .next()
-        .expect("the large_step slider")
-        .set_value_accesskit(0.0);
-    h.run_steps(2);
+    set_slider(&mut h, "large_step", 0.0);
     assert_eq!(
         h.state().controller.sessions_started,
         sessions,

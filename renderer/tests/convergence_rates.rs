@@ -158,12 +158,15 @@ fn mean_squared_error_falls_like_n_to_the_minus_alpha_and_radius_squared_like_n_
                     }
                 }
             }
-            let points: Vec<(f64, f64)> = checkpoints
-                .iter()
-                .map(|&n| n as f64)
-                .zip(mse.iter().copied())
-                .collect();
-            let slope = log_log_slope(&points);
+            let against_passes = |ys: &[f64]| {
+                let points: Vec<(f64, f64)> = checkpoints
+                    .iter()
+                    .map(|&n| n as f64)
+                    .zip(ys.iter().copied())
+                    .collect();
+                log_log_slope(&points)
+            };
+            let slope = against_passes(&mse);
             eprintln!("{variant:?}, alpha {alpha:.3}: MSE {mse:?}, slope {slope:.3}");
             assert!(
                 (slope + alpha).abs() < 0.12,
@@ -172,12 +175,7 @@ fn mean_squared_error_falls_like_n_to_the_minus_alpha_and_radius_squared_like_n_
             );
             // The kernel's bias is proportional to R^2 where the radiance is smooth, so it falls
             // as the radius schedule does: R^2 like n^(alpha - 1).
-            let r_points: Vec<(f64, f64)> = checkpoints
-                .iter()
-                .map(|&n| n as f64)
-                .zip(radius_sq.iter().copied())
-                .collect();
-            let r_slope = log_log_slope(&r_points);
+            let r_slope = against_passes(&radius_sq);
             eprintln!("{variant:?}, alpha {alpha:.3}: mean R^2 slope {r_slope:.3}");
             assert!(
                 (r_slope - (alpha - 1.0)).abs() < 0.08,

@@ -119,20 +119,16 @@ fn photon_mappers_agree_with_the_path_tracer_on_cornell_glass() {
     let all: Vec<usize> = (0..reference.pixels.len()).collect();
     let reference_mean = mean_luminance_of(&reference, &all);
     for integrator in ["sppm", "ppm", "pppm"] {
-        let (short, _) = render(
-            cornell_box(true),
-            integrator,
-            &[("photons", 2_000.0)],
-            16,
-            size,
-        );
-        let (long, _) = render(
-            cornell_box(true),
-            integrator,
-            &[("photons", 2_000.0)],
-            1024,
-            size,
-        );
+        let run = |passes| {
+            render(
+                cornell_box(true),
+                integrator,
+                &[("photons", 2e3)],
+                passes,
+                size,
+            )
+        };
+        let ((short, _), (long, _)) = (run(16), run(1024));
         let ratio = mean_luminance_of(&long, &all) / reference_mean;
         let (e_short, e_long) = (
             compare(&short, &reference).unwrap().rel_mse,
