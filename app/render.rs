@@ -2,9 +2,9 @@
 
 use crate::param_flags::{ParamFlags, flag_of};
 use anyhow::{Context, anyhow};
-use caustica::metadata::{RunDescription, exr_metadata};
 use caustica_renderer::image::{write_exr, write_png};
 use caustica_renderer::integrators;
+use caustica_renderer::metadata::exr_metadata;
 use caustica_renderer::scene::gltf;
 use caustica_renderer::session::{MAX_RESOLUTION, Session, SessionConfig, SessionError};
 use clap::Args;
@@ -241,7 +241,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             frame.rays as f64 / secs / 1e6
         ));
     }
-    let threads = session.threads();
+    let run = session.run_description(&args.scene);
     let frame = session.wait();
     bar.finish_and_clear();
     for m in frame.messages.iter() {
@@ -249,16 +249,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     }
 
     let secs = frame.elapsed.as_secs_f64().max(1e-9);
-    let metadata = exr_metadata(
-        &RunDescription {
-            integrator: info.name,
-            params: &params,
-            seed: args.seed,
-            scene: &args.scene,
-            threads,
-        },
-        &frame,
-    );
+    let metadata = exr_metadata(&run, &frame);
     let estimate = frame.error.as_ref().as_ref();
     match format {
         Format::Exr => write_exr(&args.output, &frame.image, &metadata),
@@ -274,7 +265,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             "rays": frame.rays,
             "dropped_samples": frame.dropped,
             "elapsed_seconds": secs,
-            "threads": threads,
+            "threads": run.threads,
             "messages": *frame.messages,
             "estimated_relmse": estimate.map(|e| e.rel_mse),
             "estimated_bias_relmse": estimate.map(|e| e.bias_rel_mse),
@@ -297,7 +288,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         frame.passes,
         frame.samples,
         secs,
-        threads,
+        run.threads,
         frame.rays as f64 / secs / 1e6,
         frame.dropped,
         estimate.map_or("unknown".to_string(), |e| format!("{:.3e}", e.rel_mse)),

@@ -123,6 +123,9 @@ fn ctrl_s_saves_a_readable_exr_snapshot_with_metadata() {
     assert!(image.mean_luminance() > 0.0 && image.count_non_finite() == 0);
     assert_eq!(meta["integrator"], "pt");
     assert!(meta["passes"].parse::<u64>().unwrap() >= 2);
+    // The same header as the command line's (one builder): threads resolved, rays counted.
+    assert!(meta["threads"].parse::<usize>().unwrap() >= 1, "{meta:?}");
+    assert!(meta["rays"].parse::<u64>().unwrap() > 0 && meta.contains_key("dropped_samples"));
 
     // Save PNG writes what the window shows.
     h.state_mut().apply(Command::SavePng);

@@ -2,9 +2,9 @@
 //! (as displayed), written on a helper thread whose result comes back as a message, so a
 //! slow or failed save never stops the render or the UI.
 
-use crate::metadata::{RunDescription, exr_metadata};
 use crate::viewer::ViewerApp;
 use caustica_renderer::image::{write_exr, write_png_tone_mapped};
+use caustica_renderer::metadata::exr_metadata;
 use std::path::PathBuf;
 
 impl ViewerApp {
@@ -39,17 +39,11 @@ impl ViewerApp {
             .as_ref()
             .map(|s| s.path.clone())
             .unwrap_or_default();
-        let session = self.controller.session();
-        let metadata = exr_metadata(
-            &RunDescription {
-                integrator: &self.settings.integrator,
-                params: session.map_or(&self.settings.params, |s| s.params()),
-                seed: self.settings.seed,
-                scene: &scene,
-                threads: session.map_or(0, |s| s.threads()),
-            },
-            &frame,
-        );
+        let Some(session) = self.controller.session() else {
+            self.error("nothing to save: no render is running");
+            return;
+        };
+        let metadata = exr_metadata(&session.run_description(&scene), &frame);
         let tx = self.saves.0.clone();
         std::thread::spawn(move || {
             let result = if png {

@@ -29,6 +29,7 @@ pub mod image;
 pub mod integrators;
 pub mod light;
 pub mod material;
+pub mod metadata;
 pub mod procedural;
 pub mod sampling;
 pub mod scene;

@@ -10,6 +10,7 @@ use crate::image::Image;
 use crate::integrators::{
     self, Integrator, ParamValues, PassStats, PixelLayer, PlotSeries, RenderContext,
 };
+use crate::metadata::RunDescription;
 use crate::scene::Scene;
 use arc_swap::ArcSwap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -105,6 +106,7 @@ pub struct Session {
     params: ParamValues,
     integrator: &'static integrators::IntegratorInfo,
     threads: usize,
+    seed: u64,
 }
 
 impl Session {
@@ -180,6 +182,7 @@ impl Session {
             params,
             integrator: info,
             threads,
+            seed: config.seed,
         })
     }
 
@@ -198,6 +201,18 @@ impl Session {
 
     pub fn threads(&self) -> usize {
         self.threads
+    }
+
+    /// What this session renders, for the header of an image of it (`metadata`): its
+    /// parameters as they stand now, the worker threads it uses; `scene` names the file.
+    pub fn run_description(&self, scene: &std::path::Path) -> RunDescription {
+        RunDescription {
+            integrator: self.integrator.name.to_string(),
+            params: self.params.clone(),
+            seed: self.seed,
+            scene: scene.to_path_buf(),
+            threads: self.threads,
+        }
     }
 
     pub fn is_done(&self) -> bool {

@@ -153,3 +153,44 @@ fn the_scene_is_shared_safely_between_threads() {
         assert_eq!(h.join().unwrap(), reference);
     }
 }
+
+/// The header every saved image carries comes from the session itself: the integrator, its
+/// parameters as they stand after a live change, the seed, the worker threads it resolved
+/// (not the 0 that asked for one per core) and the frame's counters.
+#[test]
+fn run_metadata_describes_the_session_as_it_stands() {
+    use caustica_renderer::metadata::exr_metadata;
+    let mut c = config(Some(2));
+    (c.integrator, c.threads, c.seed) = ("sppm".into(), 0, 42);
+    c.params.insert("photons".into(), 1000.0);
+    let mut session = Session::start(c).unwrap();
+    session.set_live_param("alpha", 0.5).unwrap();
+    let run = session.run_description(std::path::Path::new("box.gltf"));
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    assert_eq!((run.threads, run.seed), (cores, 42));
+    let frame = session.wait();
+    let m = exr_metadata(&run, &frame);
+    let params: serde_json::Value = serde_json::from_str(&m["parameters"]).unwrap();
+    assert_eq!(
+        (params["alpha"].as_f64(), params["photons"].as_f64()),
+        (Some(0.5), Some(1000.0))
+    );
+    let expected = [
+        ("integrator", "sppm".to_string()),
+        ("seed", "42".to_string()),
+        ("scene", "box.gltf".to_string()),
+        ("threads", cores.to_string()),
+        ("passes", frame.passes.to_string()),
+        ("samples", frame.samples.to_string()),
+        ("rays", frame.rays.to_string()),
+        ("dropped_samples", frame.dropped.to_string()),
+    ];
+    for (key, value) in expected {
+        assert_eq!(m[key], value, "{key}");
+    }
+    assert!(m["elapsed_seconds"].parse::<f64>().unwrap() > 0.0);
+    assert!(
+        m["estimated_relmse"].parse::<f64>().unwrap() > 0.0,
+        "two passes estimate their error"
+    );
+}

@@ -1,17 +1,20 @@
 //! What Caustica writes beside every image it saves: the EXR header attributes (DESIGN.md
-//! section 3), built in this one place for the command line and the viewer.
+//! section 3), built in this one place for the command line and the viewer from the
+//! session's own account of its run (`Session::run_description`).
 
-use caustica_renderer::integrators::{ParamValues, params_json};
-use caustica_renderer::session::Frame;
+use crate::integrators::{ParamValues, params_json};
+use crate::session::Frame;
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::PathBuf;
 
-/// The run an image came from.
-pub struct RunDescription<'a> {
-    pub integrator: &'a str,
-    pub params: &'a ParamValues,
+/// The run an image came from: the integrator with its parameters as they stand (live
+/// changes included), the seed, the scene file and the worker threads actually used.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunDescription {
+    pub integrator: String,
+    pub params: ParamValues,
     pub seed: u64,
-    pub scene: &'a Path,
+    pub scene: PathBuf,
     pub threads: usize,
 }
 
@@ -23,8 +26,8 @@ pub struct RunDescription<'a> {
 /// error estimated without a reference, and `estimated_bias_relmse` its squared-bias part.
 pub fn exr_metadata(run: &RunDescription, frame: &Frame) -> BTreeMap<String, String> {
     let mut m = BTreeMap::from([
-        ("integrator".to_string(), run.integrator.to_string()),
-        ("parameters".to_string(), params_json(run.params)),
+        ("integrator".to_string(), run.integrator.clone()),
+        ("parameters".to_string(), params_json(&run.params)),
         (
             "elapsed_seconds".to_string(),
             format!("{:.3}", frame.elapsed.as_secs_f64()),
