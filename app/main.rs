@@ -43,6 +43,10 @@ struct Cli {
     /// Render height in the viewer (otherwise the remembered one).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RESOLUTION)))]
     height: Option<u32>,
+    /// Window size in logical points, WIDTHxHEIGHT (otherwise the remembered one, at first
+    /// 1280x800).
+    #[arg(long, value_parser = parse_window_size)]
+    window_size: Option<[f32; 2]>,
     /// Save a screenshot of the window to this PNG once the render has been shown for
     /// --screenshot-after seconds, then quit (for scripted runs).
     #[arg(long)]
@@ -88,6 +92,16 @@ fn finish(subcommand: &str, result: Result<(), render::Failure>) -> ExitCode {
     }
 }
 
+fn parse_window_size(text: &str) -> Result<[f32; 2], String> {
+    let parsed = text
+        .split_once('x')
+        .and_then(|(w, h)| Some([w.parse::<u16>().ok()?, h.parse::<u16>().ok()?]))
+        .filter(|[w, h]| *w >= 200 && *h >= 150);
+    parsed
+        .map(|[w, h]| [f32::from(w), f32::from(h)])
+        .ok_or_else(|| format!("'{text}' is not WIDTHxHEIGHT with both at least 200x150"))
+}
+
 fn main() -> ExitCode {
     let launched = std::time::Instant::now();
     let cli = Cli::parse();
@@ -108,6 +122,7 @@ fn main() -> ExitCode {
                 integrator: cli.integrator,
                 width: cli.width,
                 height: cli.height,
+                window_size: cli.window_size,
                 launched: Some(launched),
                 automation,
             };

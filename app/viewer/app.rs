@@ -124,11 +124,16 @@ impl ViewerApp {
             frame: current,
             resident_bytes: self.show_process_stats.then(resident_bytes).flatten(),
         };
-        let commands = panels::side_panel(ui, &self.settings, &status);
-        if self.show_process_stats {
-            ui.label(format!("UI {:.0} frames/s", self.timings.ui_fps));
-        }
-        commands
+        // In a short window the panel scrolls rather than cutting its statistics off.
+        egui::ScrollArea::vertical()
+            .show(ui, |ui| {
+                let commands = panels::side_panel(ui, &self.settings, &status);
+                if self.show_process_stats {
+                    ui.label(format!("UI {:.0} frames/s", self.timings.ui_fps));
+                }
+                commands
+            })
+            .inner
     }
 
     /// The image, with the error heat map over it when it is on; sets the hovered pixel.
@@ -168,9 +173,13 @@ impl eframe::App for ViewerApp {
             .default_size(300.0)
             .show(ui, |ui| commands = self.settings_panel(ui, current));
         if self.settings.show_plots {
+            // A quarter of the window at first, resizable (egui remembers the size with the
+            // window's state), and never more than half: the image keeps most of the window.
+            let window_height = ui.max_rect().height();
             egui::Panel::bottom("plots")
                 .resizable(true)
-                .default_size(200.0)
+                .default_size(0.25 * window_height)
+                .size_range(80.0..=(0.5 * window_height).max(80.0))
                 .show(ui, |ui| {
                     let integrator_plots = current.map(|f| f.plots.clone()).unwrap_or_default();
                     commands.extend(plots::plots_panel(ui, &self.convergence, &integrator_plots));

@@ -3,13 +3,17 @@
 //! rendering, then quit.
 
 use crate::viewer::ViewerApp;
+use caustica_renderer::image::write_png_tone_mapped;
 use eframe::egui;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// A scripted run: save a screenshot of the window to `screenshot` once the render has been
-/// shown for `after`, then close.
+/// shown for `after`, then close. Beside it go the image that was on screen, tone-mapped as
+/// shown (`NAME.frame.png`), and `NAME.json`: where on the screenshot that image was
+/// (`image_rect`, in pixels), the time to the first frame and the UI frame rate, so a test
+/// can check that the window shows the render and how fluidly.
 #[derive(Clone, Debug)]
 pub struct Automation {
     pub screenshot: PathBuf,
@@ -57,13 +61,39 @@ impl ViewerApp {
             self.screenshot_requested = true;
             let t = self.timings.clone();
             let upload = self.viewport.last_upload.unwrap_or_default();
+            let shown = self.viewport.shown.clone();
+            let (exposure, curve) = (self.settings.exposure, self.settings.tone_curve);
+            let pixels_per_point = ctx.pixels_per_point();
             let closer = ctx.clone();
             let callback = egui::ScreenshotCallback::new(move |image: Arc<egui::ColorImage>| {
                 let [w, h] = image.size;
                 let rgba: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
                 let result = ::image::RgbaImage::from_raw(w as u32, h as u32, rgba)
                     .ok_or_else(|| "bad screenshot".to_string())
-                    .and_then(|img| img.save(&auto.screenshot).map_err(|e| e.to_string()));
+                    .and_then(|img| img.save(&auto.screenshot).map_err(|e| e.to_string()))
+                    .and_then(|()| {
+                        let rect = shown.as_ref().map(|(r, _)| {
+                            [r.min.x, r.min.y, r.max.x, r.max.y].map(|v| v * pixels_per_point)
+                        });
+                        let record = serde_json::json!({
+                            "window": [w, h],
+                            "image_rect": rect,
+                            "first_frame_seconds": t.first_frame_shown.map(|d| d.as_secs_f64()),
+                            "ui_fps": t.ui_fps,
+                        });
+                        let json = auto.screenshot.with_extension("json");
+                        std::fs::write(&json, record.to_string()).map_err(|e| e.to_string())?;
+                        match &shown {
+                            Some((_, frame)) => write_png_tone_mapped(
+                                &auto.screenshot.with_extension("frame.png"),
+                                frame,
+                                exposure,
+                                curve,
+                            )
+                            .map_err(|e| e.to_string()),
+                            None => Ok(()),
+                        }
+                    });
                 eprintln!(
                     "automation: screenshot {} ({result:?}); first frame shown after {:.2} s; {:.1} UI frames/s; last upload {:.2} ms",
                     auto.screenshot.display(),

@@ -25,9 +25,11 @@ pub fn run(options: ViewerOptions) -> eframe::Result<()> {
     let native = eframe::NativeOptions {
         viewport: eframe::egui::ViewportBuilder::default()
             .with_title("Caustica")
-            .with_inner_size([1280.0, 800.0])
+            .with_inner_size(options.window_size.unwrap_or([1280.0, 800.0]))
             .with_drag_and_drop(true),
         renderer: eframe::Renderer::Wgpu,
+        // A size asked for on the command line wins over the remembered one.
+        persist_window: options.window_size.is_none(),
         ..Default::default()
     };
     eframe::run_native(

@@ -65,10 +65,11 @@ pub fn plots_panel(
             titles.push(&series.plot);
         }
     }
+    // Each plot takes the height its column has left below its own headers, so the plots
+    // never ask for more than the panel has (a panel grows to fit what it holds).
     let columns = 1 + titles.len();
-    let height = ui.available_height().max(80.0);
     let width = (ui.available_width() - 8.0 * (columns - 1) as f32) / columns as f32;
-    ui.horizontal(|ui| {
+    ui.horizontal_top(|ui| {
         ui.vertical(|ui| {
             ui.set_width(width);
             let estimated: PlotPoints<'static> = convergence
@@ -76,20 +77,25 @@ pub fn plots_panel(
                 .iter()
                 .map(|p| [p[0].log10(), p[1].log10()])
                 .collect();
-            convergence_plot(ui, height, &log_points, estimated);
+            convergence_plot(ui, &log_points, estimated);
         });
         for title in &titles {
             ui.vertical(|ui| {
                 ui.set_width(width);
                 ui.strong(*title);
-                integrator_plot(ui, height - 20.0, title, integrator_plots);
+                integrator_plot(ui, title, integrator_plots);
             });
         }
     });
     out
 }
 
-fn integrator_plot(ui: &mut egui::Ui, height: f32, title: &str, all: &[PlotSeries]) {
+/// The height left in `ui` for a plot, at least a legible minimum.
+fn plot_height(ui: &egui::Ui) -> f32 {
+    ui.available_height().max(60.0)
+}
+
+fn integrator_plot(ui: &mut egui::Ui, title: &str, all: &[PlotSeries]) {
     let mut series: Vec<&PlotSeries> = all.iter().filter(|s| s.plot == title).collect();
     // Several bar series (MMLT's technique shares, one per path length) overlap: show the
     // one the user picks, remembered in egui's memory for this plot.
@@ -116,7 +122,7 @@ fn integrator_plot(ui: &mut egui::Ui, height: f32, title: &str, all: &[PlotSerie
     }
     let Some(first) = series.first() else { return };
     Plot::new(("integrator plot", title))
-        .height(height)
+        .height(plot_height(ui))
         .legend(Legend::default())
         .x_axis_label(first.x_label.clone())
         .y_axis_label(first.y_label.clone())
@@ -138,12 +144,11 @@ fn integrator_plot(ui: &mut egui::Ui, height: f32, title: &str, all: &[PlotSerie
 
 fn convergence_plot(
     ui: &mut egui::Ui,
-    height: f32,
     log_points: &dyn Fn(fn(&caustica_renderer::image::ErrorMetrics) -> f64) -> PlotPoints<'static>,
     estimated: PlotPoints<'static>,
 ) {
     Plot::new("convergence")
-        .height(height)
+        .height(plot_height(ui))
         .legend(Legend::default())
         .x_axis_label("seconds")
         .y_axis_label("error")

@@ -30,6 +30,8 @@ pub struct ViewerOptions {
     /// Render size, overriding the remembered one.
     pub width: Option<u32>,
     pub height: Option<u32>,
+    /// Window size in logical points, overriding the remembered one.
+    pub window_size: Option<[f32; 2]>,
     /// Scripted run for tests: save a screenshot after some seconds of rendering, then quit.
     pub automation: Option<Automation>,
 }

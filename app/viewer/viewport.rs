@@ -27,6 +27,8 @@ pub struct Viewport {
     /// Image coordinates at the panel's centre (used when not fitting).
     center: Vec2,
     uploaded: Option<Arc<Image>>,
+    /// Where the image was last drawn, in screen points, and the image drawn there.
+    pub shown: Option<(Rect, Arc<Image>)>,
     /// Duration of the last frame upload (conversion and copy to the GPU).
     pub last_upload: Option<Duration>,
     pub uploads: u64,
@@ -107,6 +109,7 @@ impl Viewport {
 
         let image_rect = Rect::from_min_size(rect.center() - self.center * zoom, size * zoom);
         let visible = image_rect.intersect(rect);
+        self.shown = Some((image_rect, image.clone()));
         if visible.is_positive() {
             match render_state {
                 Some(_) => {
