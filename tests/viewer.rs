@@ -599,6 +599,14 @@ fn mmlt_in_the_viewer_with_live_large_step_histogram_and_warning() {
 fn the_panel_recommends_the_estimator_the_scene_needs() {
     let mut h = harness(Some(asset("caustic-pool.gltf")));
     step_until(&mut h, "the first frames", rendering);
+    // The survey comes after the first image, from the loading thread.
+    step_until(&mut h, "the survey", |a| {
+        a.controller
+            .scene
+            .as_ref()
+            .is_some_and(|s| s.survey.is_some())
+    });
+    h.run_steps(1);
     assert_eq!(h.state().settings.integrator, "pt");
     h.get_by_label("recommended: sppm");
     h.get_by_label("Use sppm").click();
@@ -610,7 +618,8 @@ fn the_panel_recommends_the_estimator_the_scene_needs() {
         .scene
         .as_ref()
         .unwrap()
-        .recommendation
+        .recommendation()
+        .unwrap()
         .params
         .clone();
     let session = state.controller.session().unwrap();

@@ -116,6 +116,22 @@ fn check_window(display: &str, dir: &Path, scene: &str, integrator: &str, window
         serde_json::from_str(&std::fs::read_to_string(shot.with_extension("json")).unwrap())
             .unwrap();
     eprintln!("{case}: {record}");
+    // Something of the scene comes first: the preview, before the integrator's first pass
+    // (MMLT's holds its bootstrap of seconds).
+    let first = record["first_frame_seconds"]
+        .as_f64()
+        .expect("a frame was shown");
+    if let Some(pass) = record["first_pass_seconds"].as_f64() {
+        assert!(
+            first <= pass,
+            "{case}: the first pass came before the first frame"
+        );
+    } else {
+        assert_eq!(
+            integrator, "mmlt",
+            "{case}: no pass within a second of the first frame"
+        );
+    }
     let rect: Vec<f64> = record["image_rect"]
         .as_array()
         .expect("an image was shown")

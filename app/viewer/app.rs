@@ -119,7 +119,7 @@ impl ViewerApp {
         let scene = self.controller.scene.as_ref();
         let status = PanelStatus {
             scene: scene.map(|s| (s.path.as_path(), &s.scene.info)),
-            recommendation: scene.map(|s| &s.recommendation),
+            recommendation: scene.and_then(|s| s.recommendation()),
             loading: self.controller.loading(),
             frame: current,
             resident_bytes: self.show_process_stats.then(resident_bytes).flatten(),

@@ -23,7 +23,10 @@ pub struct Automation {
 /// Timings the viewer measures about itself (shown in the panel, printed by automation).
 #[derive(Clone, Debug, Default)]
 pub struct ViewerTimings {
+    /// From launch to the first image of the scene (the preview, or a pass if that came
+    /// first) and to the first pass of the integrator.
     pub first_frame_shown: Option<Duration>,
+    pub first_pass_shown: Option<Duration>,
     pub ui_frames: u64,
     pub ui_fps: f32,
     window: (u64, Option<Instant>),
@@ -42,8 +45,14 @@ impl ViewerApp {
             }
             _ => {}
         }
-        if t.first_frame_shown.is_none() && self.controller.frame().is_some_and(|f| f.passes > 0) {
+        let frame = self.controller.frame();
+        if t.first_frame_shown.is_none()
+            && frame.as_ref().is_some_and(|f| f.passes > 0 || f.preview)
+        {
             t.first_frame_shown = Some(self.started.elapsed());
+        }
+        if t.first_pass_shown.is_none() && frame.is_some_and(|f| f.passes > 0) {
+            t.first_pass_shown = Some(self.started.elapsed());
         }
     }
 
@@ -79,6 +88,7 @@ impl ViewerApp {
                             "window": [w, h],
                             "image_rect": rect,
                             "first_frame_seconds": t.first_frame_shown.map(|d| d.as_secs_f64()),
+                            "first_pass_seconds": t.first_pass_shown.map(|d| d.as_secs_f64()),
                             "ui_fps": t.ui_fps,
                         });
                         let json = auto.screenshot.with_extension("json");
@@ -95,9 +105,10 @@ impl ViewerApp {
                         }
                     });
                 eprintln!(
-                    "automation: screenshot {} ({result:?}); first frame shown after {:.2} s; {:.1} UI frames/s; last upload {:.2} ms",
+                    "automation: screenshot {} ({result:?}); first frame shown after {:.2} s, first pass after {:.2} s; {:.1} UI frames/s; last upload {:.2} ms",
                     auto.screenshot.display(),
                     t.first_frame_shown.unwrap_or_default().as_secs_f64(),
+                    t.first_pass_shown.unwrap_or_default().as_secs_f64(),
                     t.ui_fps,
                     upload.as_secs_f64() * 1e3
                 );

@@ -16,13 +16,21 @@ use std::sync::mpsc::{Receiver, TryRecvError, channel};
 pub struct LoadedScene {
     pub path: PathBuf,
     pub scene: Arc<Scene>,
-    /// Its light transport and the estimator it needs (surveyed on the loading thread).
-    pub transport: TransportSurvey,
-    pub recommendation: Recommendation,
+    /// Its light transport and the estimator it needs: surveyed on the loading thread after
+    /// the scene has started rendering (the survey traces paths for a second or two, which the
+    /// first image must not wait for); None until then.
+    pub survey: Option<(TransportSurvey, Recommendation)>,
+    survey_arrives: Option<Receiver<(TransportSurvey, Recommendation)>>,
 }
 
-/// A scene loaded and surveyed on the loading thread.
-type Loaded = (Scene, TransportSurvey, Recommendation);
+impl LoadedScene {
+    pub fn recommendation(&self) -> Option<&Recommendation> {
+        self.survey.as_ref().map(|(_, r)| r)
+    }
+}
+
+/// What the loading thread sends: the scene, then a receiver for its survey.
+type Loaded = (Arc<Scene>, Receiver<(TransportSurvey, Recommendation)>);
 
 /// What happened in the background since the last poll.
 #[derive(Debug, Clone, PartialEq)]
@@ -71,11 +79,19 @@ impl RenderController {
         let notify = self.on_frame.clone();
         let load_path = path.clone();
         std::thread::spawn(move || {
-            let loaded = gltf::load(&load_path).map(|scene| {
-                let (survey, recommendation) = transport::analyse(&scene, width, height);
-                (scene, survey, recommendation)
-            });
-            let _ = tx.send(loaded);
+            let scene = match gltf::load(&load_path) {
+                Ok(scene) => scene,
+                Err(e) => {
+                    let _ = tx.send(Err(e));
+                    notify();
+                    return;
+                }
+            };
+            let scene = Arc::new(scene);
+            let (survey_tx, survey_rx) = channel();
+            let _ = tx.send(Ok((scene.clone(), survey_rx)));
+            notify();
+            let _ = survey_tx.send(transport::analyse(&scene, width, height));
             notify();
         });
         self.loading = Some((path, rx));
@@ -88,6 +104,12 @@ impl RenderController {
     /// Collects finished loads; a loaded scene replaces the current one and starts rendering.
     pub fn poll(&mut self, settings: &ViewerSettings) -> Vec<ControllerEvent> {
         let mut events = Vec::new();
+        if let Some(loaded) = &mut self.scene
+            && let Some(Ok(survey)) = loaded.survey_arrives.as_ref().map(|rx| rx.try_recv())
+        {
+            loaded.survey = Some(survey);
+            loaded.survey_arrives = None;
+        }
         let Some((path, rx)) = &self.loading else {
             return events;
         };
@@ -104,14 +126,14 @@ impl RenderController {
                 events.push(ControllerEvent::SceneFailed(e.to_string()));
                 self.loading = None;
             }
-            Ok(Ok((scene, survey, recommendation))) => {
+            Ok(Ok((scene, survey_arrives))) => {
                 let path = path.clone();
                 self.loading = None;
                 self.scene = Some(LoadedScene {
                     path: path.clone(),
-                    scene: Arc::new(scene),
-                    transport: survey,
-                    recommendation,
+                    scene,
+                    survey: None,
+                    survey_arrives: Some(survey_arrives),
                 });
                 match self.restart(settings) {
                     Ok(()) => events.push(ControllerEvent::SceneLoaded(path)),

@@ -315,7 +315,14 @@ fn statistics(ui: &mut egui::Ui, status: &PanelStatus) {
             let secs = f.elapsed.as_secs_f64();
             let pixels = (f.image.width * f.image.height).max(1) as f64;
             let rows = [
-                ("state", format!("{:?}", f.state)),
+                (
+                    "state",
+                    if f.preview {
+                        "preview (first pass under way)".to_string()
+                    } else {
+                        format!("{:?}", f.state)
+                    },
+                ),
                 ("elapsed", format!("{secs:.1} s")),
                 ("passes", f.passes.to_string()),
                 (

@@ -141,7 +141,7 @@ impl ViewerApp {
                     .controller
                     .scene
                     .as_ref()
-                    .map(|s| s.recommendation.clone())
+                    .and_then(|s| s.recommendation().cloned())
                 else {
                     return;
                 };

@@ -81,6 +81,11 @@ impl PerspectiveCamera {
         }
     }
 
+    /// Width over height of the film.
+    pub fn aspect(&self) -> f32 {
+        self.aspect
+    }
+
     pub fn position(&self) -> Vec3 {
         self.camera_to_world.translation.into()
     }

@@ -30,6 +30,7 @@ pub mod integrators;
 pub mod light;
 pub mod material;
 pub mod metadata;
+pub mod preview;
 pub mod procedural;
 pub mod sampling;
 pub mod scene;

@@ -11,6 +11,7 @@ use crate::integrators::{
     self, Integrator, ParamValues, PassStats, PixelLayer, PlotSeries, RenderContext,
 };
 use crate::metadata::RunDescription;
+use crate::preview;
 use crate::scene::Scene;
 use arc_swap::ArcSwap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -78,6 +79,9 @@ pub struct Frame {
     pub dropped: u64,
     pub elapsed: Duration,
     pub state: RunState,
+    /// The image is the quick, coarse look at the scene shown until the first pass ends
+    /// (`preview`), not the integrator's estimate.
+    pub preview: bool,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -138,7 +142,7 @@ impl Session {
             camera,
             seed: config.seed,
         };
-        let integrator = (info.create)(ctx, &params);
+        let integrator = (info.create)(ctx.clone(), &params);
         let shared = Arc::new(Shared {
             frame: ArcSwap::from_pointee(Frame {
                 image: Arc::new(Image::new(w as usize, h as usize)),
@@ -153,6 +157,7 @@ impl Session {
                 dropped: 0,
                 elapsed: Duration::ZERO,
                 state: RunState::Running,
+                preview: false,
             }),
             cancel: AtomicBool::new(false),
             paused: Mutex::new(false),
@@ -165,6 +170,7 @@ impl Session {
             .spawn(move || {
                 run(
                     worker_shared,
+                    ctx,
                     integrator,
                     pool,
                     Limits {
@@ -348,6 +354,7 @@ impl Limits {
 
 fn run(
     shared: Arc<Shared>,
+    ctx: RenderContext,
     mut integrator: Box<dyn Integrator>,
     pool: rayon::ThreadPool,
     limits: Limits,
@@ -375,11 +382,25 @@ fn run(
             dropped: totals.dropped,
             elapsed,
             state,
+            preview: false,
         }));
         if let Some(notify) = &on_frame {
             notify();
         }
     };
+    // Something of the scene at once, however long the first pass takes.
+    if let Ok(image) = pool.install(|| preview::render(&ctx, &shared.cancel)) {
+        let first = shared.frame.load_full();
+        shared.frame.store(Arc::new(Frame {
+            image: Arc::new(image),
+            elapsed: start.elapsed(),
+            preview: true,
+            ..(*first).clone()
+        }));
+        if let Some(notify) = &on_frame {
+            notify();
+        }
+    }
     let mut estimate = Estimate::of(integrator.as_ref(), None);
     let mut schedule = ErrorSchedule {
         last: None,

@@ -194,3 +194,40 @@ fn run_metadata_describes_the_session_as_it_stands() {
         "two passes estimate their error"
     );
 }
+
+/// Before the first pass ends, the session shows a coarse preview of the scene, marked as
+/// such and counting no pass: the door, lit only through a slit, shows its geometry (short
+/// paths find no light there); the Cornell box its lit image. The first pass replaces it.
+/// (MMLT, whose first pass holds its bootstrap of 10^5 samples per path length, so the
+/// preview is there to be seen long before it ends.)
+#[test]
+fn a_preview_of_the_scene_comes_before_the_first_pass() {
+    use caustica_renderer::procedural::door;
+    for desc in [door(), cornell_box(false)] {
+        let integrator = "mmlt";
+        let mut c = config(Some(1));
+        c.scene = Arc::new(Scene::build(desc).unwrap());
+        c.integrator = integrator.into();
+        c.params.insert("max_depth".into(), 5.0);
+        let session = Session::start(c).unwrap();
+        wait_for(&session, |f| f.preview || f.passes > 0);
+        let preview = session.frame();
+        assert!(
+            preview.preview,
+            "{integrator}: the first frame is the preview"
+        );
+        assert_eq!((preview.passes, preview.samples), (0, 0));
+        let lit = preview
+            .image
+            .pixels
+            .iter()
+            .filter(|p| p.max_element() > 0.0)
+            .count();
+        assert!(
+            lit * 2 > preview.image.pixels.len(),
+            "{integrator}: the preview shows the scene"
+        );
+        let last = session.wait();
+        assert!(!last.preview && last.passes == 1, "{integrator}");
+    }
+}

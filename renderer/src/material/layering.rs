@@ -15,23 +15,27 @@
 //!
 //! Schlick's Fresnel is linear in f0, so E = f0 A(mu, alpha) + (1 - f0) B(mu, alpha) with
 //! A = ∫ s cos and B = ∫ (1 - wo.h)^5 s cos over the unfresnelled lobe s = D G / (4 cos cos).
-//! Both are tabulated once by quadrature over visible normals (Heitz 2018: the estimator
-//! of ∫ s cos is G2 / G1) and looked up bilinearly.
+//! Both are tabulated by quadrature over visible normals (Heitz 2018: the estimator of
+//! ∫ s cos is G2 / G1) and looked up bilinearly. The quadrature takes a second on two cores,
+//! which the first image of a scene must not wait for, so its result ships as generated data
+//! (`layering_table.rs`, written by `examples/make_layering_table.rs`; a test checks that it
+//! is what the quadrature gives).
 
+use crate::material::layering_table::{SPECULAR_A, SPECULAR_B};
 use crate::material::microfacet::TrowbridgeReitz;
 use glam::{Vec2, Vec3};
 use std::sync::OnceLock;
 
-const N_MU: usize = 32;
-const N_ALPHA: usize = 32;
+pub const N_MU: usize = 32;
+pub const N_ALPHA: usize = 32;
 /// Midpoint strata per axis of the quadrature: the reflected direction's horizon makes the
 /// integrand non-smooth in sample space and the error falls only like 1/STRATA (measured:
 /// 1.3e-3 at 32, 2e-4 at 128, against 4M-sample Monte Carlo).
 const STRATA: usize = 128;
 
 struct Tables {
-    a: Vec<f32>,
-    b: Vec<f32>,
+    a: &'static [f32],
+    b: &'static [f32],
     a_avg: Vec<f32>,
     b_avg: Vec<f32>,
 }
@@ -74,18 +78,22 @@ fn integrate(mu: f32, alpha: f32) -> (f32, f32) {
     ((a / n) as f32, (b / n) as f32)
 }
 
+/// A and B on the (mu, alpha) grid, index j N_MU + i, by quadrature: what
+/// `layering_table.rs` holds.
+pub fn quadrature_tables() -> (Vec<f32>, Vec<f32>) {
+    use rayon::prelude::*;
+    (0..N_MU * N_ALPHA)
+        .into_par_iter()
+        .map(|c| integrate(grid_mu(c % N_MU), grid_alpha(c / N_MU)))
+        .unzip()
+}
+
 fn tables() -> &'static Tables {
     static TABLES: OnceLock<Tables> = OnceLock::new();
     TABLES.get_or_init(|| {
-        use rayon::prelude::*;
-        let cells: Vec<(f32, f32)> = (0..N_MU * N_ALPHA)
-            .into_par_iter()
-            .map(|c| integrate(grid_mu(c % N_MU), grid_alpha(c / N_MU)))
-            .collect();
-        let a: Vec<f32> = cells.iter().map(|c| c.0).collect();
-        let b: Vec<f32> = cells.iter().map(|c| c.1).collect();
+        let (a, b) = (&SPECULAR_A[..], &SPECULAR_B[..]);
         // E_avg = 2 ∫ E(mu) mu dmu = 4 ∫ E(x^2) x^3 dx (mu = x^2), trapezoid rule in x.
-        let avg = |t: &[f32], j: usize| {
+        let avg = |t: &[f32], j: usize| -> f32 {
             let h = 1.0 / (N_MU - 1) as f32;
             (0..N_MU)
                 .map(|i| {
@@ -97,8 +105,8 @@ fn tables() -> &'static Tables {
                 * 4.0
                 * h
         };
-        let a_avg = (0..N_ALPHA).map(|j| avg(&a, j)).collect();
-        let b_avg = (0..N_ALPHA).map(|j| avg(&b, j)).collect();
+        let a_avg = (0..N_ALPHA).map(|j| avg(a, j)).collect();
+        let b_avg = (0..N_ALPHA).map(|j| avg(b, j)).collect();
         Tables { a, b, a_avg, b_avg }
     })
 }
@@ -134,6 +142,21 @@ pub fn specular_albedo_average(alpha: f32, f0: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The shipped table is the quadrature's result (regenerate it with
+    /// `cargo run -p caustica-renderer --example make_layering_table`).
+    #[test]
+    fn the_shipped_table_is_what_the_quadrature_gives() {
+        let (a, b) = quadrature_tables();
+        for (shipped, computed) in [(&SPECULAR_A[..], &a), (&SPECULAR_B[..], &b)] {
+            for (i, (s, c)) in shipped.iter().zip(computed.iter()).enumerate() {
+                assert!(
+                    (s - c).abs() <= 1e-6,
+                    "cell {i}: shipped {s}, quadrature {c}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn albedo_limits() {

@@ -6,6 +6,7 @@
 pub mod dielectric;
 pub mod diffuse;
 pub mod layering;
+mod layering_table;
 pub mod metallic_roughness;
 pub mod microfacet;
 pub mod mirror;
