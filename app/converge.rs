@@ -249,6 +249,7 @@ pub fn measure(
         time_limit: Some(Duration::from_secs_f64(m.seconds)),
         on_frame: None,
         target_rel_mse: None,
+        background: false,
     })
     .map_err(|e| anyhow!("{}: {e}", spec.label()))?;
     let mut records = Vec::new();

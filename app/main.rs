@@ -54,6 +54,10 @@ struct Cli {
     /// Seconds of rendering before --screenshot is taken.
     #[arg(long, default_value_t = 3.0, requires = "screenshot")]
     screenshot_after: f64,
+    /// With --screenshot: redraw continuously meanwhile, as while the user drags a slider
+    /// (to measure the UI frame rate the render leaves).
+    #[arg(long, requires = "screenshot")]
+    animate: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -115,6 +119,7 @@ fn main() -> ExitCode {
             let automation = cli.screenshot.map(|screenshot| Automation {
                 screenshot,
                 after: Duration::from_secs_f64(cli.screenshot_after.max(0.0)),
+                continuous: cli.animate,
             });
             let options = ViewerOptions {
                 scene: cli.scene,

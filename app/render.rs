@@ -200,6 +200,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         time_limit: args.time.map(Duration::from_secs_f64),
         on_frame: None,
         target_rel_mse: args.until_error,
+        background: false,
     })
     .map_err(|e| match e {
         // The parameters are checked here, once, against this integrator's ranges.

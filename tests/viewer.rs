@@ -232,6 +232,7 @@ fn the_convergence_plot_measures_the_render_against_a_reference() {
         time_limit: None,
         on_frame: None,
         target_rel_mse: None,
+        background: false,
     })
     .unwrap()
     .wait();

@@ -129,7 +129,12 @@ impl ViewerApp {
             .show(ui, |ui| {
                 let commands = panels::side_panel(ui, &self.settings, &status);
                 if self.show_process_stats {
-                    ui.label(format!("UI {:.0} frames/s", self.timings.ui_fps));
+                    let t = &self.timings;
+                    ui.label(format!(
+                        "UI {:.0} frames/s, {:.0} ms a frame",
+                        t.ui_fps,
+                        t.ui_frame_cost * 1e3
+                    ));
                 }
                 commands
             })
@@ -160,8 +165,10 @@ impl ViewerApp {
 impl eframe::App for ViewerApp {
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
+        let cost = frame.info().cpu_usage.unwrap_or_default();
+        self.progress.record_frame();
         self.handle_input_and_events(&ctx);
-        self.update_timings();
+        self.update_timings(cost);
         let current = self.controller.frame();
         let current = current.as_deref();
         self.track_frame(&ctx, current);

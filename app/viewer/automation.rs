@@ -18,6 +18,9 @@ use std::time::{Duration, Instant};
 pub struct Automation {
     pub screenshot: PathBuf,
     pub after: Duration,
+    /// Redraw continuously, as while the user drags a slider, to measure the UI frame rate
+    /// the render leaves (otherwise progress redraws are paced, see `repaint`).
+    pub continuous: bool,
 }
 
 /// Timings the viewer measures about itself (shown in the panel, printed by automation).
@@ -29,13 +32,18 @@ pub struct ViewerTimings {
     pub first_pass_shown: Option<Duration>,
     pub ui_frames: u64,
     pub ui_fps: f32,
+    /// Mean cost of the UI frames (eframe's `cpu_usage`), in seconds.
+    pub ui_frame_cost: f32,
     window: (u64, Option<Instant>),
 }
 
 impl ViewerApp {
-    pub(super) fn update_timings(&mut self) {
+    /// Counts a UI frame; `cost` is what the one before cost (eframe's `cpu_usage`).
+    pub(super) fn update_timings(&mut self, cost: f32) {
         let t = &mut self.timings;
         t.ui_frames += 1;
+        // An exponential mean over the last ten frames or so.
+        t.ui_frame_cost += (cost - t.ui_frame_cost) * if t.ui_frames <= 2 { 1.0 } else { 0.1 };
         let now = Instant::now();
         match t.window {
             (_, None) => t.window = (t.ui_frames, Some(now)),
@@ -73,6 +81,11 @@ impl ViewerApp {
             let shown = self.viewport.shown.clone();
             let (exposure, curve) = (self.settings.exposure, self.settings.tone_curve);
             let pixels_per_point = ctx.pixels_per_point();
+            let interval = self.progress.interval();
+            let rendered = self
+                .controller
+                .frame()
+                .map(|f| (f.passes, f.samples, f.elapsed));
             let closer = ctx.clone();
             let callback = egui::ScreenshotCallback::new(move |image: Arc<egui::ColorImage>| {
                 let [w, h] = image.size;
@@ -90,6 +103,10 @@ impl ViewerApp {
                             "first_frame_seconds": t.first_frame_shown.map(|d| d.as_secs_f64()),
                             "first_pass_seconds": t.first_pass_shown.map(|d| d.as_secs_f64()),
                             "ui_fps": t.ui_fps,
+                            "ui_frame_ms": t.ui_frame_cost * 1e3,
+                            "progress_interval_ms": interval.as_secs_f64() * 1e3,
+                            "passes": rendered.map(|r| r.0),
+                            "samples_per_second": rendered.map(|r| r.1 as f64 / r.2.as_secs_f64().max(1e-9)),
                         });
                         let json = auto.screenshot.with_extension("json");
                         std::fs::write(&json, record.to_string()).map_err(|e| e.to_string())?;
@@ -117,7 +134,12 @@ impl ViewerApp {
             });
             ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(callback));
         }
-        ctx.request_repaint_after(Duration::from_millis(50));
+        // Wake for the screenshot; redraw every frame when measuring the UI under interaction.
+        if auto.continuous {
+            ctx.request_repaint();
+        } else if let Some(shown) = shown_for {
+            ctx.request_repaint_after(auto.after.saturating_sub(shown));
+        }
     }
 }
 

@@ -163,6 +163,7 @@ impl RenderController {
             time_limit: None,
             on_frame: Some(self.on_frame.clone()),
             target_rel_mse: None,
+            background: true,
         })
         .map_err(|e| e.to_string())?;
         if let Some(old) = self.session.replace(session) {

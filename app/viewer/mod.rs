@@ -10,6 +10,7 @@ pub mod dialogs;
 pub mod error_map;
 pub mod panels;
 pub mod plots;
+pub mod repaint;
 pub mod settings;
 pub mod snapshot;
 pub mod state;

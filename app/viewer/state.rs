@@ -7,6 +7,7 @@ use crate::viewer::controller::{ParamEffect, RenderController};
 use crate::viewer::convergence::Convergence;
 use crate::viewer::dialogs::DialogPurpose;
 use crate::viewer::error_map::ErrorMap;
+use crate::viewer::repaint::ProgressRepaint;
 use crate::viewer::settings::{STORAGE_KEY, ViewerSettings};
 use crate::viewer::tonemap;
 use crate::viewer::viewport::{HoveredPixel, Viewport};
@@ -61,6 +62,8 @@ pub struct ViewerApp {
     pub(super) automation: Option<Automation>,
     pub(super) screenshot_requested: bool,
     pub(super) started: Instant,
+    /// Paces the redraws that show the render's progress.
+    pub(super) progress: Arc<ProgressRepaint>,
 }
 
 impl ViewerApp {
@@ -74,9 +77,16 @@ impl ViewerApp {
         }
         let ctx = cc.egui_ctx.clone();
         let repaint: Arc<dyn Fn() + Send + Sync> = Arc::new(move || ctx.request_repaint());
+        let software = cc
+            .wgpu_render_state
+            .as_ref()
+            .is_some_and(|rs| rs.adapter.get_info().device_type == eframe::wgpu::DeviceType::Cpu);
+        let progress = Arc::new(ProgressRepaint::new(cc.egui_ctx.clone(), software));
+        let on_progress = progress.clone();
         let mut app = ViewerApp {
             settings: settings.sanitized(),
-            controller: RenderController::new(repaint.clone()),
+            controller: RenderController::new(Arc::new(move || on_progress.request())),
+            progress,
             convergence: Convergence::new(repaint),
             error_map: ErrorMap::default(),
             viewport: Viewport::default(),

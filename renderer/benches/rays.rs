@@ -179,6 +179,7 @@ fn bench_cancel(c: &mut Criterion) {
                     time_limit: None,
                     on_frame: None,
                     target_rel_mse: None,
+                    background: false,
                 })
                 .unwrap();
                 std::thread::sleep(std::time::Duration::from_millis(150));

@@ -40,6 +40,10 @@ pub struct SessionConfig {
     pub time_limit: Option<Duration>,
     /// Stop once the estimated remaining relMSE (`Frame::error`) falls below this.
     pub target_rel_mse: Option<f64>,
+    /// Run the workers below normal OS priority (the lowest niceness where the OS has it), so
+    /// that a UI sharing the cores with them stays responsive: the viewer sets it, the
+    /// command line does not.
+    pub background: bool,
     /// Called on the session's thread whenever a new frame is published (a viewer asks for a
     /// repaint here, so it redraws exactly when there is something new).
     pub on_frame: Option<FrameCallback>,
@@ -131,9 +135,18 @@ impl Session {
         } else {
             config.threads
         };
+        let background = config.background;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .thread_name(|i| format!("caustica-worker-{i}"))
+            .start_handler(move |_| {
+                if background {
+                    // Best effort: an OS that refuses leaves the worker at normal priority.
+                    let _ = thread_priority::set_current_thread_priority(
+                        thread_priority::ThreadPriority::Min,
+                    );
+                }
+            })
             .build()
             .map_err(|e| SessionError::Threads(e.to_string()))?;
         let camera = PerspectiveCamera::new(&config.scene.camera, w, h);

@@ -395,6 +395,7 @@ fn a_scene_whose_light_cannot_reach_the_camera_is_black_with_a_message() {
             time_limit: None,
             on_frame: None,
             target_rel_mse: None,
+            background: false,
         })
         .unwrap();
         let frame = session.wait();
@@ -477,6 +478,7 @@ fn bdpt_and_mmlt_images_do_not_depend_on_the_thread_count() {
                 time_limit: None,
                 on_frame: None,
                 target_rel_mse: None,
+                background: false,
             })
             .unwrap();
             (*session.wait().image).clone()

@@ -21,6 +21,7 @@ fn config(passes: Option<u64>) -> SessionConfig {
         time_limit: None,
         on_frame: None,
         target_rel_mse: None,
+        background: false,
     }
 }
 

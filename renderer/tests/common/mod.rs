@@ -35,6 +35,7 @@ pub fn render(
         time_limit: None,
         on_frame: None,
         target_rel_mse: None,
+        background: false,
     })
     .unwrap();
     let frame = session.wait();
