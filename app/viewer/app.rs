@@ -123,6 +123,7 @@ impl ViewerApp {
             loading: self.controller.loading(),
             frame: current,
             resident_bytes: self.show_process_stats.then(resident_bytes).flatten(),
+            threads: self.controller.session().map(|s| s.threads()),
         };
         // In a short window the panel scrolls rather than cutting its statistics off.
         egui::ScrollArea::vertical()

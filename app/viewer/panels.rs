@@ -19,6 +19,8 @@ pub struct PanelStatus<'a> {
     pub loading: Option<&'a Path>,
     pub frame: Option<&'a Frame>,
     pub resident_bytes: Option<u64>,
+    /// Worker threads of the running render.
+    pub threads: Option<usize>,
 }
 
 /// A numeric control that reports a value once the user is done with it: at once for live
@@ -31,21 +33,42 @@ fn commit_value(response: &egui::Response, live: bool) -> bool {
     }
 }
 
-fn param_widget(ui: &mut egui::Ui, spec: &ParamSpec, value: f64, out: &mut Vec<Command>) {
+/// The slider of one integrator parameter, its range and meaning in the hover text; at 0,
+/// where 0 is automatic, it reads "auto (the value chosen)".
+fn param_widget(
+    ui: &mut egui::Ui,
+    spec: &ParamSpec,
+    value: f64,
+    chosen: Option<f64>,
+    out: &mut Vec<Command>,
+) {
     let mut v = value;
     let tag = if spec.live { "live" } else { "restarts" };
     ui.horizontal(|ui| {
         let slider = egui::Slider::new(&mut v, spec.min..=spec.max)
             .text(spec.name)
             .logarithmic(spec.max / spec.min.max(1.0) > 100.0);
+        let slider = if spec.zero_is_automatic {
+            slider.custom_formatter(move |v, _| match (v == 0.0, chosen) {
+                (true, Some(c)) => format!("auto ({c:.3e})"),
+                (true, None) => "auto".to_string(),
+                _ => format!("{v:.4}"),
+            })
+        } else {
+            slider
+        };
         let slider = if spec.integer {
             slider.integer()
         } else {
             slider
         };
-        let response = ui
-            .add(slider)
-            .on_hover_text(format!("{}\n({tag})", spec.doc));
+        let response = ui.add(slider).on_hover_text(format!(
+            "{}\nrange {} to {}{} ({tag})",
+            spec.doc,
+            spec.min,
+            spec.max,
+            if spec.integer { ", whole numbers" } else { "" }
+        ));
         ui.label(RichText::new(if spec.live { "live" } else { "restarts" }).weak())
             .on_hover_text(if spec.live {
                 "changes apply to the passes still to come"
@@ -166,7 +189,11 @@ fn render_section(
                 .get(spec.name)
                 .copied()
                 .unwrap_or(spec.default);
-            param_widget(ui, spec, value, out);
+            let chosen = status
+                .frame
+                .and_then(|f| f.automatic.iter().find(|(n, _)| *n == spec.name))
+                .map(|(_, v)| *v);
+            param_widget(ui, spec, value, chosen, out);
         }
     }
     // What the integrator says of its state (a sticking chain, a black scene).
@@ -192,8 +219,16 @@ fn render_section(
     });
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut threads = settings.threads;
+    let running = status.threads;
+    let slider = egui::Slider::new(&mut threads, 0..=cores.max(1) * 2)
+        .text("threads")
+        .custom_formatter(move |v, _| match (v == 0.0, running) {
+            (true, Some(n)) => format!("auto ({n} threads)"),
+            (true, None) => "auto".to_string(),
+            _ => format!("{v}"),
+        });
     let r = ui
-        .add(egui::Slider::new(&mut threads, 0..=cores.max(1) * 2).text("threads"))
+        .add(slider)
         .on_hover_text("worker threads, 0 for one per core (restarts)");
     if commit_value(&r, false) && threads != settings.threads {
         out.push(Command::SetThreads(threads));

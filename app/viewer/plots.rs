@@ -104,6 +104,7 @@ fn integrator_plot(ui: &mut egui::Ui, title: &str, all: &[PlotSeries]) {
         .copied()
         .filter(|s| s.kind == PlotKind::Bars)
         .collect();
+    let mut map_width = 0.0;
     if bars.len() > 1 {
         let id = ui.scope_id().with(("shown series", title));
         let mut chosen = ui
@@ -119,27 +120,99 @@ fn integrator_plot(ui: &mut egui::Ui, title: &str, all: &[PlotSeries]) {
             });
         ui.data_mut(|d| d.insert_temp(id, chosen.clone()));
         series.retain(|s| s.kind != PlotKind::Bars || s.name == chosen);
+        map_width = (ui.available_width() * 0.4).min(plot_height(ui) * 1.5);
     }
     let Some(first) = series.first() else { return };
-    Plot::new(("integrator plot", title))
-        .height(plot_height(ui))
-        .legend(Legend::default())
-        .x_axis_label(first.x_label.clone())
-        .y_axis_label(first.y_label.clone())
-        .show(ui, |plot| {
-            for s in &series {
-                match s.kind {
-                    PlotKind::Line => plot.line(Line::new(
-                        s.name.clone(),
-                        PlotPoints::from(s.points.clone()),
-                    )),
-                    PlotKind::Bars => {
-                        let bars = s.points.iter().map(|p| Bar::new(p[0], p[1])).collect();
-                        plot.bar_chart(BarChart::new(s.name.clone(), bars));
+    let height = plot_height(ui);
+    // Beside the chosen bars, every series at once as a grid (MMLT: k by s).
+    ui.horizontal_top(|ui| {
+        if map_width > 0.0 {
+            series_map(ui, &bars, egui::vec2(map_width, height));
+        }
+        Plot::new(("integrator plot", title))
+            .height(height)
+            .width(ui.available_width())
+            .legend(Legend::default())
+            .x_axis_label(first.x_label.clone())
+            .y_axis_label(first.y_label.clone())
+            .show(ui, |plot| {
+                for s in &series {
+                    match s.kind {
+                        PlotKind::Line => plot.line(Line::new(
+                            s.name.clone(),
+                            PlotPoints::from(s.points.clone()),
+                        )),
+                        PlotKind::Bars => {
+                            let bars = s
+                                .points
+                                .iter()
+                                .enumerate()
+                                .map(|(i, p)| {
+                                    let bar = Bar::new(p[0], p[1]);
+                                    match s.point_names.get(i) {
+                                        Some(name) => bar.name(name),
+                                        None => bar,
+                                    }
+                                })
+                                .collect();
+                            plot.bar_chart(BarChart::new(s.name.clone(), bars));
+                        }
                     }
                 }
+            });
+    });
+}
+
+/// Bar series side by side as a grid, a row per series and a column per bar, each cell's
+/// colour its share (dark: none, bright yellow: all): MMLT's whole technique histogram, a
+/// row per path length k and a column per technique s. Hovering a cell names it.
+fn series_map(ui: &mut egui::Ui, series: &[&PlotSeries], size: egui::Vec2) {
+    let (rect, response) = ui.allocate_exact_size(size, egui::Sense::hover());
+    let columns = series
+        .iter()
+        .map(|s| s.points.len())
+        .max()
+        .unwrap_or(1)
+        .max(1);
+    let rows = series.len().max(1);
+    let label_width = 36.0;
+    let cell = egui::vec2(
+        (rect.width() - label_width) / columns as f32,
+        rect.height() / rows as f32,
+    );
+    let painter = ui.painter_at(rect);
+    let text = ui.visuals().text_color();
+    let mut hovered = None;
+    for (row, s) in series.iter().enumerate() {
+        let y = rect.top() + row as f32 * cell.y;
+        painter.text(
+            egui::pos2(rect.left(), y + cell.y / 2.0),
+            egui::Align2::LEFT_CENTER,
+            &s.name,
+            egui::FontId::proportional(cell.y.clamp(6.0, 11.0)),
+            text,
+        );
+        for (column, p) in s.points.iter().enumerate() {
+            let min = egui::pos2(rect.left() + label_width + column as f32 * cell.x, y);
+            let cell_rect = egui::Rect::from_min_size(min, cell).shrink(0.5);
+            painter.rect_filled(cell_rect, 0.0, share_colour(p[1]));
+            if response.hover_pos().is_some_and(|h| cell_rect.contains(h)) {
+                let name = s.point_names.get(column).cloned().unwrap_or_default();
+                hovered = Some(format!("{}, {name}: {:.1} %", s.name, p[1] * 100.0));
             }
-        });
+        }
+    }
+    if let Some(h) = hovered {
+        response.on_hover_text(h);
+    }
+}
+
+/// A dark-blue-to-yellow ramp for a share in [0, 1], brightening like its square root so
+/// that small shares stay visible.
+fn share_colour(share: f64) -> egui::Color32 {
+    let t = share.clamp(0.0, 1.0).sqrt() as f32;
+    let lerp = |a: f32, b: f32| (a + (b - a) * t) as u8;
+    egui::Color32::from_rgb(lerp(20.0, 250.0), lerp(20.0, 230.0), lerp(70.0, 40.0))
 }
 
 fn convergence_plot(
@@ -181,6 +254,7 @@ mod tests {
                 x_label: "passes".into(),
                 y_label: "radius".into(),
                 points: vec![[1.0, 0.1], [2.0, 0.08]],
+                point_names: Vec::new(),
             },
             PlotSeries {
                 plot: "Techniques".into(),
@@ -189,6 +263,7 @@ mod tests {
                 x_label: "s".into(),
                 y_label: "share".into(),
                 points: vec![[0.0, 0.5], [1.0, 0.5]],
+                point_names: vec!["s = 0, t = 5".into(), "s = 1, t = 4".into()],
             },
         ];
         let harness = Harness::builder()

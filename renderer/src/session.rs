@@ -72,6 +72,8 @@ pub struct Frame {
     pub messages: Arc<Vec<String>>,
     /// The integrator's statistics as JSON, if it keeps any (MMLT's technique histogram).
     pub statistics: Arc<Option<serde_json::Value>>,
+    /// The values the integrator chose for parameters left automatic (`Integrator::automatic`).
+    pub automatic: Arc<Vec<(&'static str, f64)>>,
     /// The image's remaining error estimated without a reference (None until the integrator
     /// has enough samples to estimate it). Renewed after every pass where that costs little,
     /// else as often as it costs a tenth of the time, and at least whenever the passes have
@@ -163,6 +165,7 @@ impl Session {
                 pixel_layers: Arc::new(Vec::new()),
                 messages: Arc::new(Vec::new()),
                 statistics: Arc::new(None),
+                automatic: Arc::new(Vec::new()),
                 error: Arc::new(None),
                 passes: 0,
                 samples: 0,
@@ -288,6 +291,7 @@ struct Estimate {
     pixel_layers: Arc<Vec<PixelLayer>>,
     messages: Arc<Vec<String>>,
     statistics: Arc<Option<serde_json::Value>>,
+    automatic: Arc<Vec<(&'static str, f64)>>,
     error: Arc<Option<ErrorEstimate>>,
 }
 
@@ -300,6 +304,7 @@ impl Estimate {
             pixel_layers: Arc::new(integrator.pixel_layers()),
             messages: Arc::new(integrator.messages()),
             statistics: Arc::new(integrator.statistics()),
+            automatic: Arc::new(integrator.automatic()),
             error: error.unwrap_or_else(|| Arc::new(integrator.error_estimate())),
         }
     }
@@ -388,6 +393,7 @@ fn run(
             pixel_layers: estimate.pixel_layers.clone(),
             messages: estimate.messages.clone(),
             statistics: estimate.statistics.clone(),
+            automatic: estimate.automatic.clone(),
             error: estimate.error.clone(),
             passes,
             samples: totals.samples,

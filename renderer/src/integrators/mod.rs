@@ -81,6 +81,11 @@ pub trait Integrator: Send {
     fn messages(&self) -> Vec<String> {
         Vec::new()
     }
+    /// The values it chose for parameters given as 0 where 0 means automatic
+    /// (`ParamSpec::zero_is_automatic`), by name, for the user to see.
+    fn automatic(&self) -> Vec<(&'static str, f64)> {
+        Vec::new()
+    }
     /// Statistics worth saving beside the image (`caustica render --stats`).
     fn statistics(&self) -> Option<serde_json::Value> {
         None
@@ -108,6 +113,8 @@ pub struct PlotSeries {
     pub x_label: String,
     pub y_label: String,
     pub points: Vec<[f64; 2]>,
+    /// A name for each point (bars: MMLT's technique "s = 1, t = 3"), or none.
+    pub point_names: Vec<String>,
 }
 
 /// A named per-pixel value (row-major, the image's size).

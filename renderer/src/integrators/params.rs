@@ -15,6 +15,9 @@ pub struct ParamSpec {
     pub integer: bool,
     /// Changes apply to the passes still to come without a restart.
     pub live: bool,
+    /// 0 asks the integrator to choose the value; the value it chose is its
+    /// `Integrator::automatic` of this name.
+    pub zero_is_automatic: bool,
 }
 
 impl ParamSpec {
@@ -33,6 +36,15 @@ impl ParamSpec {
             max: range.1,
             integer: false,
             live: false,
+            zero_is_automatic: false,
+        }
+    }
+
+    /// The same parameter, where 0 lets the integrator choose.
+    pub const fn automatic_at_zero(self) -> Self {
+        ParamSpec {
+            zero_is_automatic: true,
+            ..self
         }
     }
 

@@ -306,6 +306,16 @@ impl Mmlt {
     }
 }
 
+/// Technique (s, t) of path length k, as the plots name it. For k = 0 the only technique is
+/// (0, 2) (see `path_sample`).
+pub fn technique_name(k: usize, s: usize) -> String {
+    if k == 0 {
+        "s = 0, t = 2".to_string()
+    } else {
+        format!("s = {s}, t = {}", k + 2 - s)
+    }
+}
+
 impl Integrator for Mmlt {
     fn render_pass(&mut self, _pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let mut stats = PassStats::default();
@@ -472,13 +482,16 @@ impl Integrator for Mmlt {
                 plot: "Techniques".into(),
                 name: format!("k = {k}"),
                 kind: PlotKind::Bars,
-                x_label: "s (light vertices)".into(),
+                x_label: format!("s light vertices, t = {} - s camera vertices", k + 2),
                 y_label: "share of steps".into(),
                 points: l
                     .steps_in_technique
                     .iter()
                     .enumerate()
                     .map(|(s, &c)| [s as f64, c as f64 / total as f64])
+                    .collect(),
+                point_names: (0..l.steps_in_technique.len())
+                    .map(|s| technique_name(k, s))
                     .collect(),
             });
         }
@@ -496,6 +509,7 @@ impl Integrator for Mmlt {
                 .filter(|(_, l)| l.large.proposed + l.small.proposed > 0)
                 .map(|(k, l)| [k as f64, f(l)])
                 .collect(),
+            point_names: Vec::new(),
         };
         if self.steps > 0 {
             plots.push(rates("large steps", |l| l.large.rate()));

@@ -95,7 +95,8 @@ impl PhotonMappingSettings {
             "Initial gather radius in scene units; 0 picks four pixel footprints at the median distance of the surfaces the camera sees.",
             0.0,
             (0.0, 1e6),
-        ),
+        )
+        .automatic_at_zero(),
         ParamSpec::new(
             "photons",
             "Photons traced per pass.",
@@ -620,6 +621,10 @@ impl Integrator for PhotonMapper {
         }
     }
 
+    fn automatic(&self) -> Vec<(&'static str, f64)> {
+        vec![("radius", self.initial_radius())]
+    }
+
     fn error_estimate(&self) -> Option<ErrorEstimate> {
         self.estimate_error()
     }
@@ -640,6 +645,7 @@ impl Integrator for PhotonMapper {
             x_label: "passes".into(),
             y_label: "radius".into(),
             points: self.radius_history.iter().map(|h| [h[0], f(h)]).collect(),
+            point_names: Vec::new(),
         };
         vec![
             series("mean", |h| h[1]),
