@@ -267,6 +267,31 @@ fn the_convergence_plot_measures_the_render_against_a_reference() {
     // Independent estimates of the same image: the mean luminance ratio is near one.
     let last = points.last().unwrap().metrics;
     assert!((last.mean_luminance_ratio - 1.0).abs() < 0.1, "{last:?}");
+
+    // As in tev: C flips the view to the reference and back.
+    h.key_press(egui::Key::C);
+    h.run_steps(2);
+    let shown = |h: &Harness<'static, ViewerApp>| h.state().viewport.shown.clone().unwrap().1;
+    let reference_image = h.state().convergence.reference_image.clone().unwrap();
+    assert!(h.state().show_reference);
+    assert!(std::sync::Arc::ptr_eq(&shown(&h), &reference_image));
+    h.get_by_label("reference (C: back to the render)");
+    h.key_press(egui::Key::C);
+    h.run_steps(2);
+    assert!(!std::sync::Arc::ptr_eq(&shown(&h), &reference_image));
+    // With a reference the error map (E) shows each pixel's true relMSE term, whose mean is
+    // the plotted relMSE.
+    h.state_mut().apply(Command::ToggleErrorMap);
+    step_until(&mut h, "the true error map", |a| {
+        a.error_map.shows_true_error()
+    });
+    let truth = h.state().convergence.true_error.clone().unwrap();
+    let mean = truth.terms.iter().map(|&t| t as f64).sum::<f64>() / truth.terms.len() as f64;
+    let plotted = h.state().convergence.points.last().unwrap().metrics.rel_mse;
+    assert!(
+        (mean / plotted - 1.0).abs() < 1e-4,
+        "{mean} against {plotted}"
+    );
     // A reference of another size is refused with a message, not a crash.
     h.state_mut().apply(Command::SetResolution(50, 50));
     step_until(&mut h, "the size mismatch", |a| {

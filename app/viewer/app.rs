@@ -10,7 +10,7 @@ use crate::viewer::panels::{self, PanelStatus};
 use crate::viewer::plots;
 use crate::viewer::settings::STORAGE_KEY;
 use caustica_renderer::session::Frame;
-use eframe::egui::{self, Key, KeyboardShortcut, Modifiers};
+use eframe::egui::{self, Key, KeyboardShortcut, Modifiers, RichText};
 use std::path::PathBuf;
 
 impl ViewerApp {
@@ -60,6 +60,7 @@ impl ViewerApp {
                 (Key::F, Command::Fit),
                 (Key::Num1, Command::OneToOne),
                 (Key::E, Command::ToggleErrorMap),
+                (Key::C, Command::ToggleReference),
             ];
             for (key, command) in keys {
                 if ctx.input(|i| i.key_pressed(key) && i.modifiers.is_none()) {
@@ -89,7 +90,10 @@ impl ViewerApp {
                     .record_estimate(f.elapsed.as_secs_f64(), e.rel_mse);
             }
             if self.settings.show_error_map {
-                self.error_map.update(ctx, &f.error);
+                match &self.convergence.true_error {
+                    Some(truth) => self.error_map.show_true_error(ctx, truth),
+                    None => self.error_map.show_estimate(ctx, &f.error),
+                }
             }
         }
     }
@@ -109,7 +113,7 @@ impl ViewerApp {
                 }
             } else {
                 ui.label(
-                    "Space pause · R restart · Ctrl+O open · Ctrl+S save · F fit · 1 one-to-one",
+                    "Space pause · R restart · Ctrl+O open · Ctrl+S save · F fit · 1 one-to-one · E error map · C reference",
                 );
             }
         });
@@ -145,21 +149,43 @@ impl ViewerApp {
     /// The image, with the error heat map over it when it is on; sets the hovered pixel.
     fn image_view(&mut self, ui: &mut egui::Ui, frame: &eframe::Frame, current: Option<&Frame>) {
         let layers = current.map(|f| f.pixel_layers.clone()).unwrap_or_default();
+        let title = if self.error_map.shows_true_error() {
+            "relMSE per pixel against the reference"
+        } else {
+            "estimated relMSE per pixel"
+        };
         let overlay = self
             .settings
             .show_error_map
-            .then(|| self.error_map.texture())
+            .then(|| self.error_map.texture().map(|t| (t, title)))
             .flatten();
+        // C flips to the reference (same size), as tev does.
+        let reference = self.convergence.reference_image.as_ref().filter(|r| {
+            current.is_some_and(|f| (f.image.width, f.image.height) == (r.width, r.height))
+        });
+        let shown = match (self.show_reference, reference) {
+            (true, Some(r)) => Some(r),
+            _ => current.map(|f| &f.image),
+        };
         self.hovered = self.viewport.show(
             ui,
             frame.wgpu_render_state(),
-            current.map(|f| &f.image),
+            shown,
             &layers,
             current.and_then(|f| f.error.as_ref().as_ref()),
             overlay,
             self.settings.exposure,
             self.settings.tone_curve,
         );
+        if self.show_reference && reference.is_some() {
+            let corner = ui.max_rect().right_top() + egui::vec2(-250.0, 8.0);
+            let text = RichText::new("reference (C: back to the render)")
+                .color(ui.visuals().warn_fg_color);
+            ui.put(
+                egui::Rect::from_min_size(corner, egui::vec2(240.0, 20.0)),
+                egui::Label::new(text),
+            );
+        }
     }
 }
 

@@ -26,6 +26,8 @@ pub enum Command {
     SavePng,
     TogglePlots,
     ToggleErrorMap,
+    /// Show the reference in place of the render (or back).
+    ToggleReference,
     ShowReferenceDialog,
     LoadReference(PathBuf),
 }

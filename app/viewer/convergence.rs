@@ -2,9 +2,11 @@
 //! the one metric implementation of the renderer (DESIGN.md section 3). The UI sends each new
 //! frame; the thread drops all but the newest, so it never falls behind and the UI never waits.
 //! Beside it, with or without a reference, the error each frame estimates of itself
-//! (`Frame::error`), recorded on the UI thread since it costs nothing to read.
+//! (`Frame::error`), recorded on the UI thread since it costs nothing to read. The thread also
+//! gives each measured frame's true error per pixel (`rel_mse_terms`), which the error map
+//! shows while a reference is loaded, and the reference itself, which the view can flip to.
 
-use caustica_renderer::image::{ErrorMetrics, Image, compare, read_exr};
+use caustica_renderer::image::{ErrorMetrics, Image, compare, read_exr, rel_mse_terms};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
@@ -24,16 +26,27 @@ enum Job {
     },
 }
 
+/// A frame's true error per pixel against the reference, row-major.
+#[derive(Debug)]
+pub struct TrueError {
+    pub width: usize,
+    pub height: usize,
+    pub terms: Vec<f32>,
+}
+
 enum Reply {
-    ReferenceLoaded(PathBuf),
+    ReferenceLoaded(PathBuf, Arc<Image>),
     Failed(String),
-    Point(u64, ConvergencePoint),
+    Point(u64, ConvergencePoint, Arc<TrueError>),
 }
 
 pub struct Convergence {
     jobs: Sender<Job>,
     replies: Receiver<Reply>,
     pub reference: Option<PathBuf>,
+    pub reference_image: Option<Arc<Image>>,
+    /// The newest measured frame's error per pixel.
+    pub true_error: Option<Arc<TrueError>>,
     pub points: Vec<ConvergencePoint>,
     /// (seconds, estimated relMSE) of the frames seen, thinned to at most about 230 points a
     /// decade of time so that hours of rendering stay a short list.
@@ -45,7 +58,7 @@ pub struct Convergence {
 }
 
 fn worker(jobs: Receiver<Job>, replies: Sender<Reply>, notify: Arc<dyn Fn() + Send + Sync>) {
-    let mut reference: Option<Image> = None;
+    let mut reference: Option<Arc<Image>> = None;
     while let Ok(mut job) = jobs.recv() {
         // Newest wins: skip measurements that a later one has made stale.
         loop {
@@ -63,12 +76,13 @@ fn worker(jobs: Receiver<Job>, replies: Sender<Reply>, notify: Arc<dyn Fn() + Se
     }
 }
 
-fn handle(job: Job, reference: &mut Option<Image>, replies: &Sender<Reply>) {
+fn handle(job: Job, reference: &mut Option<Arc<Image>>, replies: &Sender<Reply>) {
     let reply = match job {
         Job::LoadReference(path) => match read_exr(&path) {
             Ok((image, _)) => {
-                *reference = Some(image);
-                Reply::ReferenceLoaded(path)
+                let image = Arc::new(image);
+                *reference = Some(image.clone());
+                Reply::ReferenceLoaded(path, image)
             }
             Err(e) => Reply::Failed(format!("reference: {e}")),
         },
@@ -76,9 +90,19 @@ fn handle(job: Job, reference: &mut Option<Image>, replies: &Sender<Reply>) {
             image,
             seconds,
             run,
-        } => match reference.as_ref().map(|r| compare(&image, r)) {
+        } => match reference
+            .as_ref()
+            .map(|r| compare(&image, r).and_then(|m| Ok((m, rel_mse_terms(&image, r)?))))
+        {
             None => return,
-            Some(Ok(metrics)) => Reply::Point(run, ConvergencePoint { seconds, metrics }),
+            Some(Ok((metrics, terms))) => {
+                let error = TrueError {
+                    width: image.width,
+                    height: image.height,
+                    terms,
+                };
+                Reply::Point(run, ConvergencePoint { seconds, metrics }, Arc::new(error))
+            }
             Some(Err(e)) => Reply::Failed(format!("reference: {e}")),
         },
     };
@@ -97,6 +121,8 @@ impl Convergence {
             jobs,
             replies,
             reference: None,
+            reference_image: None,
+            true_error: None,
             points: Vec::new(),
             estimated: Vec::new(),
             problem: None,
@@ -116,6 +142,7 @@ impl Convergence {
         self.run += 1;
         self.points.clear();
         self.estimated.clear();
+        self.true_error = None;
         self.last_sent = None;
     }
 
@@ -153,14 +180,16 @@ impl Convergence {
     pub fn poll(&mut self) {
         loop {
             match self.replies.try_recv() {
-                Ok(Reply::ReferenceLoaded(path)) => {
+                Ok(Reply::ReferenceLoaded(path, image)) => {
                     self.reference = Some(path);
+                    self.reference_image = Some(image);
                     self.last_sent = None;
                 }
                 Ok(Reply::Failed(e)) => self.problem = Some(e),
-                Ok(Reply::Point(run, p)) if run == self.run && p.seconds > 0.0 => {
+                Ok(Reply::Point(run, p, error)) if run == self.run && p.seconds > 0.0 => {
                     self.problem = None;
                     self.points.push(p);
+                    self.true_error = Some(error);
                 }
                 Ok(Reply::Point(..)) => {}
                 Err(TryRecvError::Empty | TryRecvError::Disconnected) => break,

@@ -62,6 +62,8 @@ pub struct ViewerApp {
     pub(super) automation: Option<Automation>,
     pub(super) screenshot_requested: bool,
     pub(super) started: Instant,
+    /// The view shows the reference in place of the render.
+    pub show_reference: bool,
     /// Paces the redraws that show the render's progress.
     pub(super) progress: Arc<ProgressRepaint>,
 }
@@ -87,6 +89,7 @@ impl ViewerApp {
             settings: settings.sanitized(),
             controller: RenderController::new(Arc::new(move || on_progress.request())),
             progress,
+            show_reference: false,
             convergence: Convergence::new(repaint),
             error_map: ErrorMap::default(),
             viewport: Viewport::default(),
@@ -215,6 +218,13 @@ impl ViewerApp {
             Command::SaveExr => self.save_snapshot(false),
             Command::SavePng => self.save_snapshot(true),
             Command::TogglePlots => self.settings.show_plots = !self.settings.show_plots,
+            Command::ToggleReference => {
+                if self.convergence.reference_image.is_some() {
+                    self.show_reference = !self.show_reference;
+                } else {
+                    self.error("no reference to compare with: load one first");
+                }
+            }
             Command::ToggleErrorMap => {
                 self.settings.show_error_map = !self.settings.show_error_map;
                 self.error_map.clear();

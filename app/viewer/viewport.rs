@@ -62,7 +62,7 @@ impl Viewport {
         image: Option<&Arc<Image>>,
         layers: &[PixelLayer],
         error: Option<&ErrorEstimate>,
-        overlay: Option<egui::TextureId>,
+        overlay: Option<(egui::TextureId, &str)>,
         exposure: f32,
         curve: ToneCurve,
     ) -> Option<HoveredPixel> {
@@ -133,7 +133,7 @@ impl Viewport {
                     );
                 }
             }
-            if let Some(texture) = overlay {
+            if let Some((texture, title)) = overlay {
                 let uv = |p: Pos2| ((p - image_rect.min) / image_rect.size()).to_pos2();
                 ui.painter().image(
                     texture,
@@ -141,7 +141,7 @@ impl Viewport {
                     Rect::from_min_max(uv(visible.min), uv(visible.max)),
                     egui::Color32::WHITE,
                 );
-                error_map::legend(ui.painter(), rect, egui::Color32::WHITE);
+                error_map::legend(ui.painter(), rect, title, egui::Color32::WHITE);
             }
         }
 

@@ -238,6 +238,25 @@ pub struct ErrorMetrics {
     pub mean_luminance_ratio: f64,
 }
 
+/// Each pixel's term of relMSE against `reference` (the mean over its channels of
+/// (x - r)^2 / (r^2 + 0.01)): the true error the viewer maps, whose mean is `compare`'s
+/// `rel_mse`.
+pub fn rel_mse_terms(image: &Image, reference: &Image) -> Result<Vec<f32>, ImageError> {
+    compare(image, reference)?;
+    Ok(image
+        .pixels
+        .iter()
+        .zip(&reference.pixels)
+        .map(|(x, r)| {
+            let term = |c: usize| {
+                let (x, r) = (x[c] as f64, r[c] as f64);
+                (x - r) * (x - r) / (r * r + 0.01)
+            };
+            ((term(0) + term(1) + term(2)) / 3.0) as f32
+        })
+        .collect())
+}
+
 pub fn compare(image: &Image, reference: &Image) -> Result<ErrorMetrics, ImageError> {
     if (image.width, image.height) != (reference.width, reference.height) {
         return Err(ImageError::Invalid(format!(
@@ -277,6 +296,20 @@ pub fn compare(image: &Image, reference: &Image) -> Result<ErrorMetrics, ImageEr
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn per_pixel_terms_average_to_rel_mse() {
+        let (mut a, mut b) = (Image::new(3, 2), Image::new(3, 2));
+        for (i, (p, q)) in a.pixels.iter_mut().zip(b.pixels.iter_mut()).enumerate() {
+            *p = glam::Vec3::new(i as f32 * 0.3, 0.5, 2.0 - i as f32 * 0.1);
+            *q = glam::Vec3::new(0.2, 0.1 * i as f32, 1.5);
+        }
+        let terms = rel_mse_terms(&a, &b).unwrap();
+        let mean = terms.iter().map(|&t| t as f64).sum::<f64>() / terms.len() as f64;
+        let rel = compare(&a, &b).unwrap().rel_mse;
+        assert!((mean - rel).abs() < 1e-6 * rel, "{mean} vs {rel}");
+        assert!(rel_mse_terms(&a, &Image::new(2, 2)).is_err());
+    }
 
     #[test]
     fn exr_round_trip_keeps_pixels_and_metadata() {
