@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Measures the viewer as a user runs it, under Xvfb with software rendering (lavapipe), and
+# writes app/docs/viewer/figures.md and the table in README.md between its markers. Per
+# integrator on the Cornell box with a glass sphere, at 640 x 480 and 1280 x 720, in a
+# 1280 x 800 window with the plots shown and fresh settings:
+#   - the time from launch to the first image of the scene and to the first pass;
+#   - UI frames per second while the render's progress alone redraws the window (paced),
+#     and while it redraws continuously, as when the user drags a slider (--animate);
+#   - render throughput with the viewer open against the headless command (same seconds).
+# Usage (about 8 minutes): bash app/docs/viewer/measure.sh
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+cargo build --release -q
+bin=target/release/caustica
+work=$(mktemp -d)
+trap 'kill $xvfb 2>/dev/null || true; rm -rf "$work"' EXIT
+display=:$((70 + $$ % 20))
+Xvfb "$display" -screen 0 1600x1000x24 -nolisten tcp >/dev/null 2>&1 &
+xvfb=$!
+sleep 1
+mkdir -p "$work/xdg" && chmod 700 "$work/xdg"
+seconds=10
+
+# The number after "key": in a flat JSON record.
+field() { grep -o "\"$2\":[^,}]*" "$1" | head -1 | cut -d: -f2; }
+
+viewer() { # integrator width height extra-flags... -> the JSON record's path
+  local out="$work/$1-$2x$3${4:-}.png"
+  rm -rf "$work/home"
+  DISPLAY=$display XDG_RUNTIME_DIR=$work/xdg HOME=$work/home XDG_DATA_HOME=$work/home/data \
+    timeout 300 "$bin" assets/cornell-glass.gltf --integrator "$1" --width "$2" --height "$3" \
+    --window-size 1280x800 --screenshot "$out" --screenshot-after "$seconds" ${4:-} \
+    >/dev/null 2>&1
+  echo "${out%.png}.json"
+}
+
+table="| integrator | size | first image | first pass | UI frames/s paced | UI frames/s redrawing | samples/s viewer / headless |
+| --- | --- | --- | --- | --- | --- | --- |"
+for integrator in pt bdpt mmlt ppm sppm pppm; do
+  for size in "640 480" "1280 720"; do
+    set -- $size
+    paced=$(viewer "$integrator" "$1" "$2")
+    animated=$(viewer "$integrator" "$1" "$2" --animate)
+    headless=$("$bin" render assets/cornell-glass.gltf -o "$work/h.exr" --integrator "$integrator" \
+      --width "$1" --height "$2" --time "$seconds" 2>&1 | tail -1)
+    h_samples=$(echo "$headless" | sed -E 's/.* passes, ([0-9]+) samples in ([0-9.]+) s.*/\1 \2/')
+    h_rate=$(echo "$h_samples" | awk '{ printf "%.3g", $1 / $2 }')
+    v_rate=$(field "$paced" samples_per_second | awk '{ printf "%.3g", $1 }')
+    ratio=$(awk -v v="$v_rate" -v h="$h_rate" 'BEGIN { printf "%.2f", v / h }')
+    first_pass=$(field "$paced" first_pass_seconds)
+    [ "$first_pass" = null ] && first_pass="> ${seconds}" || first_pass=$(printf "%.2f" "$first_pass")
+    row=$(printf "| %s | %s x %s | %.2f s | %s s | %.1f | %.1f | %s / %s (%s) |" "$integrator" "$1" "$2" \
+      "$(field "$paced" first_frame_seconds)" "$first_pass" "$(field "$paced" ui_fps)" \
+      "$(field "$animated" ui_fps)" "$v_rate" "$h_rate" "$ratio")
+    table="$table
+$row"
+    echo "$row"
+  done
+done
+
+{
+  echo "Measured by \`bash app/docs/viewer/measure.sh\` on $(nproc) cores, $(date -u +%Y-%m-%d)."
+  echo
+  echo "$table"
+} > app/docs/viewer/figures.md
+# README.md holds the same table between its markers.
+awk -v file=app/docs/viewer/figures.md '
+  /<!-- viewer-figures:start -->/ { print; while ((getline line < file) > 0) print line; skip = 1; next }
+  /<!-- viewer-figures:end -->/ { skip = 0 }
+  !skip { print }
+' README.md > "$work/README.md" && cp "$work/README.md" README.md
