@@ -515,8 +515,20 @@ fn photon_mapping_in_the_viewer_with_live_alpha_radius_plot_and_inspector() {
         0.5
     );
 
-    // The integrator's radius plot and per-pixel statistics travel with the frames.
+    // The integrator's radius plot and per-pixel statistics travel with the frames, and so
+    // does the radius it chose for "auto", which the radius slider shows.
     let frame = h.state().controller.frame().unwrap();
+    let ppm = caustica_renderer::integrators::ppm::PhotonMappingSettings::PARAMS;
+    assert!(
+        ppm.iter()
+            .any(|p| p.name == "radius" && p.zero_is_automatic)
+    );
+    let chosen = frame.automatic.iter().find(|(n, _)| *n == "radius");
+    assert!(
+        chosen.is_some_and(|(_, r)| *r > 0.0),
+        "{:?}",
+        frame.automatic
+    );
     assert!(
         frame
             .plots
