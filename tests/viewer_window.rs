@@ -117,7 +117,7 @@ fn check_window(display: &str, dir: &Path, scene: &str, integrator: &str, window
             .unwrap();
     eprintln!("{case}: {record}");
     // Something of the scene comes first: the preview, before the integrator's first pass
-    // (MMLT's holds its bootstrap of seconds).
+    // (however long the machine takes for either, the order holds).
     let first = record["first_frame_seconds"]
         .as_f64()
         .expect("a frame was shown");
@@ -125,11 +125,6 @@ fn check_window(display: &str, dir: &Path, scene: &str, integrator: &str, window
         assert!(
             first <= pass,
             "{case}: the first pass came before the first frame"
-        );
-    } else {
-        assert_eq!(
-            integrator, "mmlt",
-            "{case}: no pass within a second of the first frame"
         );
     }
     let rect: Vec<f64> = record["image_rect"]
