@@ -55,7 +55,9 @@ impl ViewerApp {
         }
         let frame = self.controller.frame();
         if t.first_frame_shown.is_none()
-            && frame.as_ref().is_some_and(|f| f.passes > 0 || f.preview)
+            && frame
+                .as_ref()
+                .is_some_and(|f| f.passes > 0 || f.preview || f.preparation.is_some())
         {
             t.first_frame_shown = Some(self.started.elapsed());
         }

@@ -352,10 +352,10 @@ fn statistics(ui: &mut egui::Ui, status: &PanelStatus) {
             let rows = [
                 (
                     "state",
-                    if f.preview {
-                        "preview (first pass under way)".to_string()
-                    } else {
-                        format!("{:?}", f.state)
+                    match (f.preview, f.preparation) {
+                        (true, _) => "preview (first pass under way)".to_string(),
+                        (_, Some(done)) => format!("preparing ({:.0} %)", done * 100.0),
+                        _ => format!("{:?}", f.state),
                     },
                 ),
                 ("elapsed", format!("{secs:.1} s")),

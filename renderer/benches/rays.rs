@@ -127,7 +127,7 @@ fn bench_passes(
         group.bench_function("pass", |b| {
             b.iter(|| {
                 pass += 1;
-                pool.install(|| integrator.render_pass(pass, &cancel))
+                pool.install(|| integrator.render_counted_pass(pass, &cancel))
                     .unwrap()
             })
         });

@@ -88,6 +88,9 @@ pub struct Frame {
     /// The image is the quick, coarse look at the scene shown until the first pass ends
     /// (`preview`), not the integrator's estimate.
     pub preview: bool,
+    /// While the integrator prepares (MMLT's bootstrap), the share done; its image is then
+    /// already an estimate, but no pass is counted yet.
+    pub preparation: Option<f32>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -174,6 +177,7 @@ impl Session {
                 elapsed: Duration::ZERO,
                 state: RunState::Running,
                 preview: false,
+                preparation: None,
             }),
             cancel: AtomicBool::new(false),
             paused: Mutex::new(false),
@@ -386,7 +390,8 @@ fn run(
                    passes: u64,
                    totals: PassStats,
                    elapsed: Duration,
-                   state: RunState| {
+                   state: RunState,
+                   preparation: Option<f32>| {
         shared.frame.store(Arc::new(Frame {
             image: estimate.image.clone(),
             plots: estimate.plots.clone(),
@@ -402,16 +407,21 @@ fn run(
             elapsed,
             state,
             preview: false,
+            preparation,
         }));
         if let Some(notify) = &on_frame {
             notify();
         }
     };
     // Something of the scene at once, however long the first pass takes.
-    if let Ok(image) = pool.install(|| preview::render(&ctx, &shared.cancel)) {
+    let preview = pool
+        .install(|| preview::render(&ctx, &shared.cancel))
+        .ok()
+        .map(Arc::new);
+    if let Some(image) = &preview {
         let first = shared.frame.load_full();
         shared.frame.store(Arc::new(Frame {
-            image: Arc::new(image),
+            image: image.clone(),
             elapsed: start.elapsed(),
             preview: true,
             ..(*first).clone()
@@ -420,6 +430,7 @@ fn run(
             notify();
         }
     }
+    let pixels = u64::from(ctx.camera.width) * u64::from(ctx.camera.height);
     let mut estimate = Estimate::of(integrator.as_ref(), None);
     let mut schedule = ErrorSchedule {
         last: None,
@@ -428,18 +439,25 @@ fn run(
     loop {
         let elapsed = start.elapsed() - paused_for;
         if shared.cancel.load(Ordering::Relaxed) {
-            publish(&estimate, passes, totals, elapsed, RunState::Cancelled);
+            publish(
+                &estimate,
+                passes,
+                totals,
+                elapsed,
+                RunState::Cancelled,
+                None,
+            );
             return;
         }
         if limits.reached(passes, elapsed, &estimate) {
-            publish(&estimate, passes, totals, elapsed, RunState::Finished);
+            publish(&estimate, passes, totals, elapsed, RunState::Finished, None);
             return;
         }
         {
             let mut paused = shared.paused.lock().unwrap_or_else(|e| e.into_inner());
             if *paused {
                 let pause_start = Instant::now();
-                publish(&estimate, passes, totals, elapsed, RunState::Paused);
+                publish(&estimate, passes, totals, elapsed, RunState::Paused, None);
                 while *paused && !shared.cancel.load(Ordering::Relaxed) {
                     paused = shared
                         .resume
@@ -459,7 +477,40 @@ fn run(
         for (name, value) in changes {
             integrator.set_live_param(&name, value);
         }
+        let preparing = integrator.preparing().is_some();
         match pool.install(|| integrator.render_pass(passes, &shared.cancel)) {
+            // A preparation step: shown, counted in the totals, but not a pass.
+            Ok(stats) if preparing => {
+                totals = totals + stats;
+                let elapsed = start.elapsed() - paused_for;
+                let progress = integrator.preparing();
+                // The preparation's own image replaces the preview once it holds a sample per
+                // pixel (before, it is sparser than the preview), and stays up from the end of
+                // the preparation to the end of the first pass.
+                if progress.is_none() || (preview.is_some() && totals.samples < pixels) {
+                    let shown = shared.frame.load_full();
+                    shared.frame.store(Arc::new(Frame {
+                        preparation: progress,
+                        samples: totals.samples,
+                        rays: totals.rays,
+                        elapsed,
+                        ..(*shown).clone()
+                    }));
+                    if let Some(notify) = &on_frame {
+                        notify();
+                    }
+                    continue;
+                }
+                estimate = Estimate::of(integrator.as_ref(), Some(Arc::new(None)));
+                publish(
+                    &estimate,
+                    passes,
+                    totals,
+                    elapsed,
+                    RunState::Running,
+                    progress,
+                );
+            }
             Ok(stats) => {
                 passes += 1;
                 totals = totals + stats;
@@ -477,6 +528,7 @@ fn run(
                     totals,
                     start.elapsed() - paused_for,
                     RunState::Running,
+                    None,
                 );
             }
             Err(integrators::Cancelled) => continue,

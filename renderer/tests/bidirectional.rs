@@ -21,7 +21,7 @@ fn mean_and_standard_error(
     let mut per_pass = Vec::new();
     let mut previous_total = 0.0;
     for pass in 0..passes {
-        integrator.render_pass(pass, &cancel).unwrap();
+        integrator.render_counted_pass(pass, &cancel).unwrap();
         let total = mean(&integrator.image()) * (pass + 1) as f64;
         per_pass.push(total - previous_total);
         previous_total = total;
@@ -125,7 +125,7 @@ fn block_means(
     let mut previous = vec![0.0f64; nb];
     let lum = |p: glam::Vec3| caustica_renderer::geometry::luminance(p) as f64;
     for pass in 0..passes {
-        it.render_pass(pass, &cancel).unwrap();
+        it.render_counted_pass(pass, &cancel).unwrap();
         let img = it.image();
         let mut totals = vec![0.0f64; nb];
         for (i, p) in img.pixels.iter().enumerate() {
@@ -340,7 +340,7 @@ fn the_technique_histogram_counts_every_step() {
     let cancel = AtomicBool::new(false);
     let mut steps = 0;
     for pass in 0..5 {
-        let stats = mmlt.render_pass(pass, &cancel).unwrap();
+        let stats = mmlt.render_counted_pass(pass, &cancel).unwrap();
         steps += stats.samples;
     }
     steps -= 10_000 * 7; // the bootstrap's samples

@@ -36,7 +36,7 @@ fn rel_mse_at(
     let cancel = AtomicBool::new(false);
     let mut out = Vec::new();
     for pass in 0..*checkpoints.last().unwrap() {
-        renderer.render_pass(pass, &cancel).unwrap();
+        renderer.render_counted_pass(pass, &cancel).unwrap();
         if checkpoints.contains(&(pass + 1)) {
             let img = renderer.image();
             let sum: f64 = img

@@ -88,7 +88,7 @@ fn track(
         };
         let mut renderer = (info.create)(ctx, &params);
         for pass in 0..last {
-            renderer.render_pass(pass, &cancel).unwrap();
+            renderer.render_counted_pass(pass, &cancel).unwrap();
             if let Some(c) = out.iter_mut().find(|c| c.passes == pass + 1) {
                 let estimate = renderer.error_estimate().unwrap_or_else(|| {
                     panic!("{integrator}: no estimate after {} passes", pass + 1)
@@ -168,7 +168,7 @@ fn reference_by(
     let mut renderer = (info.create)(ctx, &params);
     let cancel = AtomicBool::new(false);
     for pass in 0..passes {
-        renderer.render_pass(pass, &cancel).unwrap();
+        renderer.render_counted_pass(pass, &cancel).unwrap();
     }
     let own = renderer.error_estimate().unwrap().rel_mse;
     (renderer.image(), own)

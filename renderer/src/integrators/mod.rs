@@ -64,6 +64,25 @@ pub struct Cancelled;
 /// give its current estimate at any time.
 pub trait Integrator: Send {
     fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled>;
+    /// While the integrator prepares before its first pass (MMLT's bootstrap), the share of
+    /// the preparation done: `render_pass` then takes one preparation step, which the session
+    /// shows (`image` is already an estimate) but does not count as a pass.
+    fn preparing(&self) -> Option<f32> {
+        None
+    }
+    /// One pass as the session counts it: whatever preparation is left, then the pass (for
+    /// callers that want passes, not the preparation's steps, such as tests).
+    fn render_counted_pass(
+        &mut self,
+        pass: u64,
+        cancel: &AtomicBool,
+    ) -> Result<PassStats, Cancelled> {
+        let mut stats = PassStats::default();
+        while self.preparing().is_some() {
+            stats = stats + self.render_pass(pass, cancel)?;
+        }
+        Ok(stats + self.render_pass(pass, cancel)?)
+    }
     /// The current normalised estimate.
     fn image(&self) -> Image;
     /// Applies a change of a live parameter, already checked by `check_live_change` (the

@@ -32,16 +32,28 @@ pub fn bootstrap_key(i: usize, k: usize, max_depth: usize) -> u64 {
     (i * (max_depth + 1) + k) as u64
 }
 
-pub fn run(
+/// One bootstrap evaluation: its target value, the rays it traced, whether its contribution
+/// was invalid (dropped), and its contribution and film position, which the image shown while
+/// the bootstrap runs sums (`Mmlt::image`).
+pub struct Evaluation {
+    pub luminance: f64,
+    pub rays: u64,
+    pub invalid: bool,
+    pub l: glam::Vec3,
+    pub raster: glam::Vec2,
+}
+
+/// Evaluates bootstrap samples `samples` (every path length of each), in key order.
+pub fn evaluate_samples(
     scene: &Scene,
     camera: &PerspectiveCamera,
     seed: u64,
-    samples: usize,
+    samples: std::ops::Range<usize>,
     max_depth: usize,
     cancel: &AtomicBool,
-) -> Result<Bootstrap, Cancelled> {
+) -> Result<Vec<Evaluation>, Cancelled> {
     let lengths = max_depth + 1;
-    let results: Vec<(f64, u64, bool)> = (0..samples * lengths)
+    (samples.start * lengths..samples.end * lengths)
         .into_par_iter()
         .map_init(Subpaths::default, |scratch, key| {
             if key % 1024 == 0 && cancel.load(Ordering::Relaxed) {
@@ -51,36 +63,57 @@ pub fn run(
             let mut sampler = PssSampler::new(seed, bootstrap_key(i, k, max_depth), 0.0, 1.0);
             let mut rays = 0;
             let sample = evaluate(scene, camera, &mut sampler, k, scratch, &mut rays);
-            Ok((sample.luminance() as f64, rays, !sample.is_valid()))
+            Ok(Evaluation {
+                luminance: sample.luminance() as f64,
+                rays,
+                invalid: !sample.is_valid(),
+                l: if sample.is_valid() {
+                    sample.l
+                } else {
+                    glam::Vec3::ZERO
+                },
+                raster: sample.raster,
+            })
         })
-        .collect::<Result<_, _>>()?;
-    let mut per_length = vec![0.0; lengths];
-    let mut per_length_mean_sq = vec![0.0; lengths];
-    // Sample i of every length together is one sample of the sum over lengths.
-    let mut sum_sq = 0.0;
-    for (key, (y, _, _)) in results.iter().enumerate() {
-        per_length[key % lengths] += y / samples as f64;
-        per_length_mean_sq[key % lengths] += y * y / samples as f64;
-    }
-    for i in 0..samples {
-        let y: f64 = results[i * lengths..(i + 1) * lengths]
-            .iter()
-            .map(|r| r.0)
+        .collect()
+}
+
+impl Bootstrap {
+    /// The bootstrap's statistics from the target value of every sample of every length (at
+    /// index i (max_depth + 1) + k), with the rays traced and the samples dropped.
+    pub fn from_luminance(luminance: Vec<f64>, lengths: usize, rays: u64, dropped: u64) -> Self {
+        let samples = luminance.len() / lengths.max(1);
+        let mut per_length = vec![0.0; lengths];
+        let mut per_length_mean_sq = vec![0.0; lengths];
+        for (key, y) in luminance.iter().enumerate() {
+            per_length[key % lengths] += y / samples as f64;
+            per_length_mean_sq[key % lengths] += y * y / samples as f64;
+        }
+        // Sample i of every length together is one sample of the sum over lengths.
+        let sum_sq: f64 = luminance
+            .chunks(lengths.max(1))
+            .map(|ys| ys.iter().sum::<f64>().powi(2))
             .sum();
-        sum_sq += y * y;
+        let b = per_length.iter().sum::<f64>();
+        let n = samples as f64;
+        let variance = (sum_sq / n - b * b).max(0.0) * n / (n - 1.0).max(1.0);
+        Bootstrap {
+            b,
+            per_length,
+            per_length_mean_sq,
+            standard_error: (variance / n).sqrt(),
+            luminance,
+            rays,
+            dropped,
+        }
     }
-    let b = per_length.iter().sum::<f64>();
-    let n = samples as f64;
-    let variance = (sum_sq / n - b * b).max(0.0) * n / (n - 1.0).max(1.0);
-    Ok(Bootstrap {
-        b,
-        per_length,
-        per_length_mean_sq,
-        standard_error: (variance / n).sqrt(),
-        luminance: results.iter().map(|r| r.0).collect(),
-        rays: results.iter().map(|r| r.1).sum(),
-        dropped: results.iter().filter(|r| r.2).count() as u64,
-    })
+}
+
+/// Bootstrap samples evaluated in the preparation step after `done` of them: few at first,
+/// so the first image comes at once, then twice as many each step, up to 8192.
+pub fn next_chunk(done: usize, total: usize) -> std::ops::Range<usize> {
+    let size = done.clamp(256, 8192);
+    done..(done + size).min(total)
 }
 
 /// Where chains start: first a path length for each chain, drawn in proportion to luminance

@@ -5,7 +5,11 @@
 //! suit each region (DESIGN.md section 5).
 //!
 //! A pass is width x height steps shared equally among the chains; chains run in parallel
-//! and their splats are merged in chain order.
+//! and their splats are merged in chain order. Before the first pass the bootstrap runs in
+//! preparation steps (`Integrator::preparing`) of growing size, and the image meanwhile is the
+//! bootstrap samples' own: independent samples of every path length, an unbiased estimate
+//! (each pixel: width x height over the samples, times the sum of the contributions that
+//! landed in it), so the first image comes at once however large the bootstrap.
 //!
 //! The chains are dealt into `CHAIN_GROUPS` groups with the same mix of path lengths, each
 //! group's chains starting from its own disjoint share of the bootstrap samples
@@ -125,8 +129,15 @@ pub const CHAIN_GROUPS: usize = 4;
 const CHAIN_KEYS: u64 = 1 << 62;
 
 enum Phase {
-    /// The bootstrap has not run yet.
-    Starting,
+    /// The bootstrap runs, a chunk of samples per preparation step: the target values so far
+    /// (every length of each sample), with the rays traced and samples dropped, and the
+    /// samples' contributions summed per pixel.
+    Bootstrapping {
+        luminance: Vec<f64>,
+        rays: u64,
+        dropped: u64,
+        splats: Vec<DVec3>,
+    },
     /// Nothing reaches the camera: every bootstrap sample was black.
     Black,
     Running {
@@ -164,7 +175,12 @@ impl Mmlt {
         Mmlt {
             ctx,
             settings,
-            phase: Phase::Starting,
+            phase: Phase::Bootstrapping {
+                luminance: Vec::new(),
+                rays: 0,
+                dropped: 0,
+                splats: vec![DVec3::ZERO; pixels],
+            },
             group_splats: vec![vec![DVec3::ZERO; pixels]; CHAIN_GROUPS],
             steps: 0,
             steps_per_chain: 0,
@@ -198,7 +214,7 @@ impl Mmlt {
     /// The normalisation b (None before the bootstrap).
     pub fn normalisation(&self) -> Option<f64> {
         match &self.phase {
-            Phase::Starting => None,
+            Phase::Bootstrapping { .. } => None,
             Phase::Black => Some(0.0),
             Phase::Running { b_sum, b_count, .. } => Some(
                 b_sum
@@ -210,20 +226,61 @@ impl Mmlt {
         }
     }
 
-    fn start(&mut self, stats: &mut PassStats, cancel: &AtomicBool) -> Result<(), Cancelled> {
+    /// One preparation step: the next chunk of bootstrap samples; after the last, the chains
+    /// start from them.
+    fn bootstrap_step(
+        &mut self,
+        stats: &mut PassStats,
+        cancel: &AtomicBool,
+    ) -> Result<(), Cancelled> {
         let (scene, camera, seed) = (&*self.ctx.scene, &self.ctx.camera, self.ctx.seed);
         let max_depth = self.settings.max_depth as usize;
-        let boot = bootstrap::run(
-            scene,
-            camera,
-            seed,
-            self.settings.bootstrap as usize,
-            max_depth,
-            cancel,
-        )?;
-        stats.rays += boot.rays;
-        stats.dropped += boot.dropped;
-        stats.samples += self.settings.bootstrap * (max_depth as u64 + 1);
+        let (lengths, total) = (max_depth + 1, self.settings.bootstrap as usize);
+        let Phase::Bootstrapping {
+            luminance,
+            rays,
+            dropped,
+            splats,
+        } = &mut self.phase
+        else {
+            return Ok(());
+        };
+        let chunk = bootstrap::next_chunk(luminance.len() / lengths, total);
+        let evaluated =
+            bootstrap::evaluate_samples(scene, camera, seed, chunk.clone(), max_depth, cancel)?;
+        let width = camera.width as usize;
+        for e in &evaluated {
+            luminance.push(e.luminance);
+            *rays += e.rays;
+            *dropped += u64::from(e.invalid);
+            let (x, y) = (e.raster.x as usize, e.raster.y as usize);
+            if let Some(pixel) = splats.get_mut(y * width + x.min(width - 1)) {
+                *pixel += e.l.as_dvec3();
+            }
+        }
+        stats.rays += evaluated.iter().map(|e| e.rays).sum::<u64>();
+        stats.dropped += evaluated.iter().filter(|e| e.invalid).count() as u64;
+        stats.samples += evaluated.len() as u64;
+        if chunk.end < total {
+            return Ok(());
+        }
+        let boot = bootstrap::Bootstrap::from_luminance(
+            std::mem::take(luminance),
+            lengths,
+            *rays,
+            *dropped,
+        );
+        self.start(boot, stats)
+    }
+
+    /// Seeds the chains from the finished bootstrap.
+    fn start(
+        &mut self,
+        boot: bootstrap::Bootstrap,
+        stats: &mut PassStats,
+    ) -> Result<(), Cancelled> {
+        let (scene, camera, seed) = (&*self.ctx.scene, &self.ctx.camera, self.ctx.seed);
+        let max_depth = self.settings.max_depth as usize;
         self.bootstrap_per_length = boot.per_length.clone();
         if !(boot.b > 0.0) {
             self.phase = Phase::Black;
@@ -317,10 +374,21 @@ pub fn technique_name(k: usize, s: usize) -> String {
 }
 
 impl Integrator for Mmlt {
+    fn preparing(&self) -> Option<f32> {
+        match &self.phase {
+            Phase::Bootstrapping { luminance, .. } => {
+                let lengths = self.settings.max_depth as usize + 1;
+                Some((luminance.len() / lengths) as f32 / self.settings.bootstrap.max(1) as f32)
+            }
+            _ => None,
+        }
+    }
+
     fn render_pass(&mut self, _pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let mut stats = PassStats::default();
-        if matches!(self.phase, Phase::Starting) {
-            self.start(&mut stats, cancel)?;
+        if self.preparing().is_some() {
+            self.bootstrap_step(&mut stats, cancel)?;
+            return Ok(stats);
         }
         let Phase::Running {
             chains,
@@ -395,6 +463,16 @@ impl Integrator for Mmlt {
             self.ctx.camera.height as usize,
         );
         let mut img = Image::new(w, h);
+        if let Phase::Bootstrapping {
+            luminance, splats, ..
+        } = &self.phase
+        {
+            let done = luminance.len() / (self.settings.max_depth as usize + 1);
+            let scale = (w * h) as f64 / done.max(1) as f64;
+            for (p, s) in img.pixels.iter_mut().zip(splats) {
+                *p = crate::film::sanitize((*s * scale).as_vec3()).unwrap_or_default();
+            }
+        }
         if let Some(scale) = self.group_scale() {
             let scale = scale / self.groups().max(1) as f64;
             for (i, p) in img.pixels.iter_mut().enumerate() {
