@@ -485,9 +485,20 @@ fn run(
                 let elapsed = start.elapsed() - paused_for;
                 let progress = integrator.preparing();
                 // The preparation's own image replaces the preview once it holds a sample per
-                // pixel (before, it is sparser than the preview), and stays up from the end of
-                // the preparation to the end of the first pass.
-                if progress.is_none() || (preview.is_some() && totals.samples < pixels) {
+                // pixel and lights a twentieth of them, as the preview's path tracer must
+                // (before, it is sparser than the preview: a room lit through a slit stays
+                // black for long), and stays up from the end of the preparation to the end
+                // of the first pass.
+                let sparse = || {
+                    let image = integrator.image();
+                    let lit = image
+                        .pixels
+                        .iter()
+                        .filter(|p| p.max_element() > 0.0)
+                        .count();
+                    totals.samples < pixels || (lit as u64) * 20 < pixels
+                };
+                if progress.is_none() || (preview.is_some() && sparse()) {
                     let shown = shared.frame.load_full();
                     shared.frame.store(Arc::new(Frame {
                         preparation: progress,
