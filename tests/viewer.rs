@@ -207,7 +207,26 @@ fn empty_viewer_snapshot() {
     let mut h = harness(None);
     h.state_mut().show_process_stats = false;
     h.run_steps(3);
-    h.snapshot("viewer_empty");
+    egui_kittest::image_snapshot(&as_in_window(&mut h), "viewer_empty");
+}
+
+/// The screen as the window shows it. The window clears to the panel colour
+/// (`App::clear_color`; the panels themselves are transparent) where egui_kittest clears to
+/// transparent black, so the test composites its image over that colour as the window does:
+/// egui blends premultiplied colours, in gamma space.
+fn as_in_window(h: &mut Harness<'static, ViewerApp>) -> image::RgbaImage {
+    let visuals = h.ctx.global_style().visuals.clone();
+    let background = eframe::App::clear_color(h.state(), &visuals);
+    let mut screen = h.render().expect("the harness renders");
+    for p in screen.pixels_mut() {
+        let coverage = p[3] as f32 / 255.0;
+        for c in 0..3 {
+            let under = background[c] * 255.0 * (1.0 - coverage);
+            p[c] = (p[c] as f32 + under).round().min(255.0) as u8;
+        }
+        p[3] = 255;
+    }
+    screen
 }
 
 #[test]

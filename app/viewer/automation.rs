@@ -31,7 +31,10 @@ pub struct ViewerTimings {
     pub first_frame_shown: Option<Duration>,
     pub first_pass_shown: Option<Duration>,
     pub ui_frames: u64,
+    /// Over the last second or so (the panel's figure).
     pub ui_fps: f32,
+    /// UI frames counted when the first image was shown, for the mean rate since then.
+    frames_at_first_frame: u64,
     /// Mean cost of the UI frames (eframe's `cpu_usage`), in seconds.
     pub ui_frame_cost: f32,
     window: (u64, Option<Instant>),
@@ -60,6 +63,7 @@ impl ViewerApp {
                 .is_some_and(|f| f.passes > 0 || f.preview || f.preparation.is_some())
         {
             t.first_frame_shown = Some(self.started.elapsed());
+            t.frames_at_first_frame = t.ui_frames;
         }
         if t.first_pass_shown.is_none() && frame.is_some_and(|f| f.passes > 0) {
             t.first_pass_shown = Some(self.started.elapsed());
@@ -79,6 +83,9 @@ impl ViewerApp {
         if !self.screenshot_requested && shown_for.is_some_and(|d| d >= auto.after) {
             self.screenshot_requested = true;
             let t = self.timings.clone();
+            // The mean UI frame rate while the render was shown (steadier than the last second).
+            let ui_fps = (t.ui_frames - t.frames_at_first_frame) as f64
+                / shown_for.unwrap_or_default().as_secs_f64().max(1e-9);
             let upload = self.viewport.last_upload.unwrap_or_default();
             let shown = self.viewport.shown.clone();
             let (exposure, curve) = (self.settings.exposure, self.settings.tone_curve);
@@ -104,7 +111,7 @@ impl ViewerApp {
                             "image_rect": rect,
                             "first_frame_seconds": t.first_frame_shown.map(|d| d.as_secs_f64()),
                             "first_pass_seconds": t.first_pass_shown.map(|d| d.as_secs_f64()),
-                            "ui_fps": t.ui_fps,
+                            "ui_fps": ui_fps,
                             "ui_frame_ms": t.ui_frame_cost * 1e3,
                             "progress_interval_ms": interval.as_secs_f64() * 1e3,
                             "passes": rendered.map(|r| r.0),
@@ -128,7 +135,7 @@ impl ViewerApp {
                     auto.screenshot.display(),
                     t.first_frame_shown.unwrap_or_default().as_secs_f64(),
                     t.first_pass_shown.unwrap_or_default().as_secs_f64(),
-                    t.ui_fps,
+                    ui_fps,
                     upload.as_secs_f64() * 1e3
                 );
                 closer.send_viewport_cmd(egui::ViewportCommand::Close);

@@ -91,6 +91,17 @@ pub fn plots_panel(
 }
 
 /// The height left in `ui` for a plot, at least a legible minimum.
+/// A plot drawn cheaply under software rendering: no background fill (the panel's colour
+/// shows through) and no grid lines closer than 24 points, the faint ones that fade in
+/// between. Every pixel egui's shader fills costs about 40 ns there (see `App::clear_color`
+/// in app.rs), and the fill and the fine grid of a plot across the window were a third of
+/// a frame.
+fn cheap_plot<'a>(id: impl egui::AsIdSalt) -> Plot<'a> {
+    Plot::new(id)
+        .show_background(false)
+        .grid_spacing(24.0..=300.0)
+}
+
 fn plot_height(ui: &egui::Ui) -> f32 {
     ui.available_height().max(60.0)
 }
@@ -129,7 +140,7 @@ fn integrator_plot(ui: &mut egui::Ui, title: &str, all: &[PlotSeries]) {
         if map_width > 0.0 {
             series_map(ui, &bars, egui::vec2(map_width, height));
         }
-        Plot::new(("integrator plot", title))
+        cheap_plot(("integrator plot", title))
             .height(height)
             .width(ui.available_width())
             .legend(Legend::default())
@@ -220,7 +231,7 @@ fn convergence_plot(
     log_points: &dyn Fn(fn(&caustica_renderer::image::ErrorMetrics) -> f64) -> PlotPoints<'static>,
     estimated: PlotPoints<'static>,
 ) {
-    Plot::new("convergence")
+    cheap_plot("convergence")
         .height(plot_height(ui))
         .legend(Legend::default())
         .x_axis_label("seconds")

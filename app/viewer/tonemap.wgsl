@@ -1,20 +1,33 @@
-// Tone mapping of the render's linear float image, drawn by an egui paint callback over the
-// visible part of the image. Curves mirror caustica_renderer::image::ToneCurve.
+// The render's display, in two passes (see tonemap.rs):
+// - fs_tone: the linear float image to 8-bit sRGB-encoded display values (exposure, tone
+//   curve), pixel for pixel into the display texture, run only when the frame or the display
+//   settings change. Curves mirror caustica_renderer::image::ToneCurve.
+// - fs_show: the visible part of the display texture over the callback's rectangle, nearest
+//   texel, every UI frame.
 
-struct Uniforms {
+// The curve is a pipeline constant, not a uniform: a software rasteriser (llvmpipe) runs
+// every side of a branch on a uniform, so a pipeline per curve costs one curve.
+override CURVE: u32 = 0u;
+
+struct ToneUniforms {
+    scale: f32,
+    pad0: f32,
+    pad1: f32,
+    pad2: f32,
+};
+
+struct ShowUniforms {
     uv_min: vec2<f32>,
     uv_max: vec2<f32>,
     size: vec2<f32>,
-    scale: f32,
-    curve: u32,
-    encode_srgb: u32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
+    pad0: vec2<f32>,
 };
 
-@group(0) @binding(0) var<uniform> u: Uniforms;
+@group(0) @binding(0) var<uniform> tone_u: ToneUniforms;
 @group(0) @binding(1) var image: texture_2d<f32>;
+
+@group(0) @binding(2) var<uniform> show_u: ShowUniforms;
+@group(0) @binding(3) var display: texture_2d<f32>;
 
 struct VsOut {
     @builtin(position) position: vec4<f32>,
@@ -32,12 +45,12 @@ fn vs_main(@builtin(vertex_index) i: u32) -> VsOut {
     return out;
 }
 
-fn tone(x_in: f32, curve: u32) -> f32 {
+fn tone(x_in: f32) -> f32 {
     let x = max(x_in, 0.0);
-    if (curve == 1u) {
+    if (CURVE == 1u) {
         return x / (1.0 + x);
     }
-    if (curve == 2u) {
+    if (CURVE == 2u) {
         return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
     }
     return min(x, 1.0);
@@ -50,14 +63,18 @@ fn srgb(x: f32) -> f32 {
     return 1.055 * pow(x, 1.0 / 2.4) - 0.055;
 }
 
+// The display texture has the image's size, so the fragment's pixel is the image's texel.
 @fragment
-fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
-    let uv = mix(u.uv_min, u.uv_max, in.uv);
-    let texel = vec2<i32>(clamp(floor(uv * u.size), vec2<f32>(0.0), u.size - vec2<f32>(1.0)));
-    let c = textureLoad(image, texel, 0).rgb * u.scale;
-    var m = vec3<f32>(tone(c.r, u.curve), tone(c.g, u.curve), tone(c.b, u.curve));
-    if (u.encode_srgb == 1u) {
-        m = vec3<f32>(srgb(m.r), srgb(m.g), srgb(m.b));
-    }
-    return vec4<f32>(m, 1.0);
+fn fs_tone(in: VsOut) -> @location(0) vec4<f32> {
+    let c = textureLoad(image, vec2<i32>(in.position.xy), 0).rgb * tone_u.scale;
+    let m = vec3<f32>(tone(c.r), tone(c.g), tone(c.b));
+    return vec4<f32>(srgb(m.r), srgb(m.g), srgb(m.b), 1.0);
+}
+
+@fragment
+fn fs_show(in: VsOut) -> @location(0) vec4<f32> {
+    let uv = mix(show_u.uv_min, show_u.uv_max, in.uv);
+    let size = show_u.size;
+    let texel = vec2<i32>(clamp(floor(uv * size), vec2<f32>(0.0), size - vec2<f32>(1.0)));
+    return vec4<f32>(textureLoad(display, texel, 0).rgb, 1.0);
 }
