@@ -19,6 +19,9 @@ impl ViewerApp {
         for event in self.controller.poll(&self.settings) {
             match event {
                 ControllerEvent::SceneLoaded(path) => {
+                    self.timings
+                        .scene_loaded
+                        .get_or_insert(self.started.elapsed());
                     self.viewport.fit();
                     self.info(format!("opened {}", path.display()));
                     self.settings.remember_scene(path);

@@ -26,8 +26,10 @@ pub struct Automation {
 /// Timings the viewer measures about itself (shown in the panel, printed by automation).
 #[derive(Clone, Debug, Default)]
 pub struct ViewerTimings {
-    /// From launch to the first image of the scene (the preview, or a pass if that came
-    /// first) and to the first pass of the integrator.
+    /// From launch to the first scene's load (as the UI learns of it), to the first image of
+    /// the scene (the preview, or a pass if that came first) and to the first pass of the
+    /// integrator.
+    pub scene_loaded: Option<Duration>,
     pub first_frame_shown: Option<Duration>,
     pub first_pass_shown: Option<Duration>,
     pub ui_frames: u64,
@@ -35,6 +37,9 @@ pub struct ViewerTimings {
     pub ui_fps: f32,
     /// UI frames counted when the first image was shown, for the mean rate since then.
     frames_at_first_frame: u64,
+    /// The render's samples and elapsed time in the first pass shown, so the render's rate
+    /// can be measured in its steady state, from there on (start-up excluded).
+    first_pass_progress: Option<(u64, Duration)>,
     /// Mean cost of the UI frames (eframe's `cpu_usage`), in seconds.
     pub ui_frame_cost: f32,
     window: (u64, Option<Instant>),
@@ -65,8 +70,11 @@ impl ViewerApp {
             t.first_frame_shown = Some(self.started.elapsed());
             t.frames_at_first_frame = t.ui_frames;
         }
-        if t.first_pass_shown.is_none() && frame.is_some_and(|f| f.passes > 0) {
+        if t.first_pass_shown.is_none()
+            && let Some(f) = frame.filter(|f| f.passes > 0)
+        {
             t.first_pass_shown = Some(self.started.elapsed());
+            t.first_pass_progress = Some((f.samples, f.elapsed));
         }
     }
 
@@ -95,6 +103,12 @@ impl ViewerApp {
                 .controller
                 .frame()
                 .map(|f| (f.passes, f.samples, f.elapsed));
+            let steady_rate = rendered.zip(t.first_pass_progress).and_then(
+                |((_, samples, elapsed), (samples0, elapsed0))| {
+                    let seconds = elapsed.saturating_sub(elapsed0).as_secs_f64();
+                    (seconds > 0.0).then(|| (samples - samples0) as f64 / seconds)
+                },
+            );
             let closer = ctx.clone();
             let callback = egui::ScreenshotCallback::new(move |image: Arc<egui::ColorImage>| {
                 let [w, h] = image.size;
@@ -109,6 +123,7 @@ impl ViewerApp {
                         let record = serde_json::json!({
                             "window": [w, h],
                             "image_rect": rect,
+                            "scene_loaded_seconds": t.scene_loaded.map(|d| d.as_secs_f64()),
                             "first_frame_seconds": t.first_frame_shown.map(|d| d.as_secs_f64()),
                             "first_pass_seconds": t.first_pass_shown.map(|d| d.as_secs_f64()),
                             "ui_fps": ui_fps,
@@ -116,6 +131,7 @@ impl ViewerApp {
                             "progress_interval_ms": interval.as_secs_f64() * 1e3,
                             "passes": rendered.map(|r| r.0),
                             "samples_per_second": rendered.map(|r| r.1 as f64 / r.2.as_secs_f64().max(1e-9)),
+                            "steady_samples_per_second": steady_rate,
                         });
                         let json = auto.screenshot.with_extension("json");
                         std::fs::write(&json, record.to_string()).map_err(|e| e.to_string())?;

@@ -3,10 +3,14 @@
 # writes app/docs/viewer/figures.md and the table in README.md between its markers. Per
 # integrator on the Cornell box with a glass sphere, at 640 x 480 and 1280 x 720, in a
 # 1280 x 800 window with the plots shown and fresh settings:
-#   - the time from launch to the first image of the scene and to the first pass;
+#   - the time from the scene's load to its first image (and from launch), and from launch
+#     to the first pass;
 #   - UI frames per second while the render's progress alone redraws the window (paced),
-#     and while it redraws continuously, as when the user drags a slider (--animate);
-#   - render throughput with the viewer open against the headless command (same seconds).
+#     and while it redraws continuously, as when the user drags a slider (--animate): the
+#     mean from the first image to the screenshot;
+#   - render throughput with the viewer open (paced) against the headless command, both in
+#     their steady state: the viewer's from its first pass to the screenshot, the command's
+#     from the difference of a 2 s and a 12 s run.
 # Usage (about 8 minutes): bash app/docs/viewer/measure.sh
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
@@ -34,23 +38,33 @@ viewer() { # integrator width height extra-flags... -> the JSON record's path
   echo "${out%.png}.json"
 }
 
-table="| integrator | size | first image | first pass | UI frames/s paced | UI frames/s redrawing | samples/s viewer / headless |
+# The headless command's steady rate: the difference of a short and a long run, so that
+# start-up (scene load, BVH build, first pass) cancels, as it does in the viewer's figure.
+headless_samples() { # integrator width height seconds -> "samples seconds"
+  "$bin" render assets/cornell-glass.gltf -o "$work/h.exr" --integrator "$1" --width "$2" \
+    --height "$3" --time "$4" 2>&1 | tail -1 |
+    sed -E 's/.* passes, ([0-9]+) samples in ([0-9.]+) s.*/\1 \2/'
+}
+
+table="| integrator | size | first image after load (after launch) | first pass | UI frames/s paced | UI frames/s redrawing | render samples/s, viewer / headless |
 | --- | --- | --- | --- | --- | --- | --- |"
 for integrator in pt bdpt mmlt ppm sppm pppm; do
   for size in "640 480" "1280 720"; do
     set -- $size
     paced=$(viewer "$integrator" "$1" "$2")
     animated=$(viewer "$integrator" "$1" "$2" --animate)
-    headless=$("$bin" render assets/cornell-glass.gltf -o "$work/h.exr" --integrator "$integrator" \
-      --width "$1" --height "$2" --time "$seconds" 2>&1 | tail -1)
-    h_samples=$(echo "$headless" | sed -E 's/.* passes, ([0-9]+) samples in ([0-9.]+) s.*/\1 \2/')
-    h_rate=$(echo "$h_samples" | awk '{ printf "%.3g", $1 / $2 }')
-    v_rate=$(field "$paced" samples_per_second | awk '{ printf "%.3g", $1 }')
+    short=$(headless_samples "$integrator" "$1" "$2" 2)
+    long=$(headless_samples "$integrator" "$1" "$2" $((seconds + 2)))
+    h_rate=$(echo "$short $long" | awk '{ printf "%.3g", ($3 - $1) / ($4 - $2) }')
+    v_rate=$(field "$paced" steady_samples_per_second | awk '{ printf "%.3g", $1 }')
     ratio=$(awk -v v="$v_rate" -v h="$h_rate" 'BEGIN { printf "%.2f", v / h }')
     first_pass=$(field "$paced" first_pass_seconds)
     [ "$first_pass" = null ] && first_pass="> ${seconds}" || first_pass=$(printf "%.2f" "$first_pass")
-    row=$(printf "| %s | %s x %s | %.2f s | %s s | %.1f | %.1f | %s / %s (%s) |" "$integrator" "$1" "$2" \
-      "$(field "$paced" first_frame_seconds)" "$first_pass" "$(field "$paced" ui_fps)" \
+    loaded=$(field "$paced" scene_loaded_seconds)
+    first=$(field "$paced" first_frame_seconds)
+    after_load=$(awk -v f="$first" -v l="$loaded" 'BEGIN { printf "%.2f", f - l }')
+    row=$(printf "| %s | %s x %s | %s s (%.2f s) | %s s | %.1f | %.1f | %s / %s (%s) |" "$integrator" \
+      "$1" "$2" "$after_load" "$first" "$first_pass" "$(field "$paced" ui_fps)" \
       "$(field "$animated" ui_fps)" "$v_rate" "$h_rate" "$ratio")
     table="$table
 $row"
