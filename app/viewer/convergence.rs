@@ -65,18 +65,23 @@ fn worker(jobs: Receiver<Job>, replies: Sender<Reply>, notify: Arc<dyn Fn() + Se
             match jobs.try_recv() {
                 Ok(next @ Job::Measure { .. }) if matches!(job, Job::Measure { .. }) => job = next,
                 Ok(next) => {
-                    handle(job, &mut reference, &replies);
+                    if handle(job, &mut reference, &replies) {
+                        notify();
+                    }
                     job = next;
                 }
                 Err(_) => break,
             }
         }
-        handle(job, &mut reference, &replies);
-        notify();
+        // The UI redraws only for a reply: without a reference, frames come and go unmeasured.
+        if handle(job, &mut reference, &replies) {
+            notify();
+        }
     }
 }
 
-fn handle(job: Job, reference: &mut Option<Arc<Image>>, replies: &Sender<Reply>) {
+/// Does the job; whether it replied.
+fn handle(job: Job, reference: &mut Option<Arc<Image>>, replies: &Sender<Reply>) -> bool {
     let reply = match job {
         Job::LoadReference(path) => match read_exr(&path) {
             Ok((image, _)) => {
@@ -94,7 +99,7 @@ fn handle(job: Job, reference: &mut Option<Arc<Image>>, replies: &Sender<Reply>)
             .as_ref()
             .map(|r| compare(&image, r).and_then(|m| Ok((m, rel_mse_terms(&image, r)?))))
         {
-            None => return,
+            None => return false,
             Some(Ok((metrics, terms))) => {
                 let error = TrueError {
                     width: image.width,
@@ -106,7 +111,7 @@ fn handle(job: Job, reference: &mut Option<Arc<Image>>, replies: &Sender<Reply>)
             Some(Err(e)) => Reply::Failed(format!("reference: {e}")),
         },
     };
-    let _ = replies.send(reply);
+    replies.send(reply).is_ok()
 }
 
 impl Convergence {

@@ -77,20 +77,19 @@ impl ViewerApp {
         if let Some(rs) = cc.wgpu_render_state.as_ref() {
             tonemap::init(rs);
         }
-        let ctx = cc.egui_ctx.clone();
-        let repaint: Arc<dyn Fn() + Send + Sync> = Arc::new(move || ctx.request_repaint());
         let software = cc
             .wgpu_render_state
             .as_ref()
             .is_some_and(|rs| rs.adapter.get_info().device_type == eframe::wgpu::DeviceType::Cpu);
         let progress = Arc::new(ProgressRepaint::new(cc.egui_ctx.clone(), software));
-        let on_progress = progress.clone();
+        // The render's frames and the convergence thread's measurements redraw at its pace.
+        let (on_frame, on_measured) = (progress.clone(), progress.clone());
         let mut app = ViewerApp {
             settings: settings.sanitized(),
-            controller: RenderController::new(Arc::new(move || on_progress.request())),
+            controller: RenderController::new(Arc::new(move || on_frame.request())),
             progress,
             show_reference: false,
-            convergence: Convergence::new(repaint),
+            convergence: Convergence::new(Arc::new(move || on_measured.request())),
             error_map: ErrorMap::default(),
             viewport: Viewport::default(),
             messages: Vec::new(),

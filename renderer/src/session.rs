@@ -302,8 +302,17 @@ struct Estimate {
 impl Estimate {
     /// The integrator's state; the error estimate anew only if `error` is None (else kept).
     fn of(integrator: &dyn Integrator, error: Option<Arc<Option<ErrorEstimate>>>) -> Estimate {
+        Estimate::with_image(integrator, integrator.image(), error)
+    }
+
+    /// The same, with the integrator's `image` already taken.
+    fn with_image(
+        integrator: &dyn Integrator,
+        image: Image,
+        error: Option<Arc<Option<ErrorEstimate>>>,
+    ) -> Estimate {
         Estimate {
-            image: Arc::new(integrator.image()),
+            image: Arc::new(image),
             plots: Arc::new(integrator.plots()),
             pixel_layers: Arc::new(integrator.pixel_layers()),
             messages: Arc::new(integrator.messages()),
@@ -353,6 +362,18 @@ impl ErrorSchedule {
     }
 }
 
+/// Whether a preparation's image, after `samples` samples, is too sparse to replace the
+/// preview: less than a sample per pixel, or less than a twentieth of the pixels lit.
+fn too_sparse(image: &Image, samples: u64) -> bool {
+    let pixels = image.pixels.len() as u64;
+    let lit = image
+        .pixels
+        .iter()
+        .filter(|p| p.max_element() > 0.0)
+        .count() as u64;
+    samples < pixels || lit * 20 < pixels
+}
+
 /// When a session stops by itself.
 struct Limits {
     passes: Option<u64>,
@@ -386,13 +407,20 @@ fn run(
     let mut paused_for = Duration::ZERO;
     let mut totals = PassStats::default();
     let mut passes = 0u64;
+    // Every frame goes out the same way: stored for the UI, which is told.
+    let show = |frame: Frame| {
+        shared.frame.store(Arc::new(frame));
+        if let Some(notify) = &on_frame {
+            notify();
+        }
+    };
     let publish = |estimate: &Estimate,
                    passes: u64,
                    totals: PassStats,
                    elapsed: Duration,
                    state: RunState,
                    preparation: Option<f32>| {
-        shared.frame.store(Arc::new(Frame {
+        show(Frame {
             image: estimate.image.clone(),
             plots: estimate.plots.clone(),
             pixel_layers: estimate.pixel_layers.clone(),
@@ -408,10 +436,7 @@ fn run(
             state,
             preview: false,
             preparation,
-        }));
-        if let Some(notify) = &on_frame {
-            notify();
-        }
+        });
     };
     // Something of the scene at once, however long the first pass takes.
     let preview = pool
@@ -420,17 +445,13 @@ fn run(
         .map(Arc::new);
     if let Some(image) = &preview {
         let first = shared.frame.load_full();
-        shared.frame.store(Arc::new(Frame {
+        show(Frame {
             image: image.clone(),
             elapsed: start.elapsed(),
             preview: true,
             ..(*first).clone()
-        }));
-        if let Some(notify) = &on_frame {
-            notify();
-        }
+        });
     }
-    let pixels = u64::from(ctx.camera.width) * u64::from(ctx.camera.height);
     let mut estimate = Estimate::of(integrator.as_ref(), None);
     let mut schedule = ErrorSchedule {
         last: None,
@@ -489,30 +510,21 @@ fn run(
                 // (before, it is sparser than the preview: a room lit through a slit stays
                 // black for long), and stays up from the end of the preparation to the end
                 // of the first pass.
-                let sparse = || {
-                    let image = integrator.image();
-                    let lit = image
-                        .pixels
-                        .iter()
-                        .filter(|p| p.max_element() > 0.0)
-                        .count();
-                    totals.samples < pixels || (lit as u64) * 20 < pixels
-                };
-                if progress.is_none() || (preview.is_some() && sparse()) {
+                let image = progress
+                    .map(|_| integrator.image())
+                    .filter(|image| preview.is_none() || !too_sparse(image, totals.samples));
+                let Some(image) = image else {
                     let shown = shared.frame.load_full();
-                    shared.frame.store(Arc::new(Frame {
+                    show(Frame {
                         preparation: progress,
                         samples: totals.samples,
                         rays: totals.rays,
                         elapsed,
                         ..(*shown).clone()
-                    }));
-                    if let Some(notify) = &on_frame {
-                        notify();
-                    }
+                    });
                     continue;
-                }
-                estimate = Estimate::of(integrator.as_ref(), Some(Arc::new(None)));
+                };
+                estimate = Estimate::with_image(integrator.as_ref(), image, Some(Arc::new(None)));
                 publish(
                     &estimate,
                     passes,
