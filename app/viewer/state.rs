@@ -1,6 +1,7 @@
 //! The viewer's state on the UI thread (settings, view, messages, the background controller)
 //! and `apply`, which carries out a `Command`. Nothing here waits for the renderer.
 
+use crate::viewer::app;
 use crate::viewer::automation::{Automation, ViewerTimings};
 use crate::viewer::command::{Command, Message};
 use crate::viewer::controller::{ParamEffect, RenderController};
@@ -82,6 +83,9 @@ impl ViewerApp {
             .as_ref()
             .is_some_and(|rs| rs.adapter.get_info().device_type == eframe::wgpu::DeviceType::Cpu);
         let progress = Arc::new(ProgressRepaint::new(cc.egui_ctx.clone(), software));
+        if software {
+            app::square_corners(&cc.egui_ctx);
+        }
         // The render's frames and the convergence thread's measurements redraw at its pace.
         let (on_frame, on_measured) = (progress.clone(), progress.clone());
         let mut app = ViewerApp {

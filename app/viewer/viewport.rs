@@ -172,7 +172,8 @@ impl Viewport {
                 .filter(|e| (e.width, e.height) == (image.width, image.height))
                 .and_then(|e| e.per_pixel.get(index))
             {
-                ui.monospace(format!("est. relMSE {v:.3e}"));
+                let text = egui::RichText::new(format!("est. relMSE {v:.3e}")).monospace();
+                ui.add(egui::Label::new(text).extend());
             }
         });
         Some(hovered)
