@@ -229,9 +229,14 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
                 .unwrap_or_else(|_| ProgressStyle::default_spinner()),
         ),
     };
+    // Where the first pass was seen, for the steady rate (start-up excluded) in the statistics.
+    let mut first_pass: Option<(u64, Duration)> = None;
     while !session.is_done() {
         std::thread::sleep(Duration::from_millis(100));
         let frame = session.frame();
+        if first_pass.is_none() && frame.passes > 0 {
+            first_pass = Some((frame.samples, frame.elapsed));
+        }
         bar.set_position(frame.passes);
         let secs = frame.elapsed.as_secs_f64().max(1e-9);
         let error = frame.error.as_ref().as_ref().map_or(String::new(), |e| {
@@ -266,6 +271,10 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             "rays": frame.rays,
             "dropped_samples": frame.dropped,
             "elapsed_seconds": secs,
+            "steady_samples_per_second": first_pass.and_then(|(samples, elapsed)| {
+                let seconds = frame.elapsed.saturating_sub(elapsed).as_secs_f64();
+                (seconds > 0.0).then(|| (frame.samples - samples) as f64 / seconds)
+            }),
             "threads": run.threads,
             "messages": *frame.messages,
             "estimated_relmse": estimate.map(|e| e.rel_mse),

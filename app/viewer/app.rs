@@ -223,7 +223,7 @@ impl eframe::App for ViewerApp {
         let cost = frame.info().cpu_usage.unwrap_or_default();
         self.progress.record_frame();
         self.handle_input_and_events(&ctx);
-        self.update_timings(cost);
+        self.update_timings(&ctx, cost);
         let current = self.controller.frame();
         let current = current.as_deref();
         self.track_frame(&ctx, current);

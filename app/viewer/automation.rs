@@ -38,16 +38,22 @@ pub struct ViewerTimings {
     /// UI frames counted when the first image was shown, for the mean rate since then.
     frames_at_first_frame: u64,
     /// The render's samples and elapsed time in the first pass shown, so the render's rate
-    /// can be measured in its steady state, from there on (start-up excluded).
+    /// can be measured in its steady state, from there on (start-up excluded), and the CPU
+    /// time the process's threads had used by then.
     first_pass_progress: Option<(u64, Duration)>,
+    first_pass_cpu: Option<(Instant, CpuTicks)>,
     /// Mean cost of the UI frames (eframe's `cpu_usage`), in seconds.
     pub ui_frame_cost: f32,
     window: (u64, Option<Instant>),
 }
 
 impl ViewerApp {
-    /// Counts a UI frame; `cost` is what the one before cost (eframe's `cpu_usage`).
-    pub(super) fn update_timings(&mut self, cost: f32) {
+    /// Counts a UI frame; `cost` is what the one before cost (eframe's `cpu_usage`). A frame
+    /// whose layout egui runs twice (a discarded first pass) is counted once.
+    pub(super) fn update_timings(&mut self, ctx: &egui::Context, cost: f32) {
+        if ctx.current_pass_index() > 0 {
+            return;
+        }
         let t = &mut self.timings;
         t.ui_frames += 1;
         // An exponential mean over the last ten frames or so.
@@ -75,6 +81,7 @@ impl ViewerApp {
         {
             t.first_pass_shown = Some(self.started.elapsed());
             t.first_pass_progress = Some((f.samples, f.elapsed));
+            t.first_pass_cpu = CpuTicks::now().map(|c| (Instant::now(), c));
         }
     }
 
@@ -109,6 +116,11 @@ impl ViewerApp {
                     (seconds > 0.0).then(|| (samples - samples0) as f64 / seconds)
                 },
             );
+            let ui_cpu_share = t
+                .first_pass_cpu
+                .as_ref()
+                .zip(CpuTicks::now())
+                .map(|((then, before), now)| now.ui_share_since(before, then.elapsed()));
             let closer = ctx.clone();
             let callback = egui::ScreenshotCallback::new(move |image: Arc<egui::ColorImage>| {
                 let [w, h] = image.size;
@@ -132,6 +144,7 @@ impl ViewerApp {
                             "passes": rendered.map(|r| r.0),
                             "samples_per_second": rendered.map(|r| r.1 as f64 / r.2.as_secs_f64().max(1e-9)),
                             "steady_samples_per_second": steady_rate,
+                            "ui_cpu_share": ui_cpu_share,
                         });
                         let json = auto.screenshot.with_extension("json");
                         std::fs::write(&json, record.to_string()).map_err(|e| e.to_string())?;
@@ -165,6 +178,48 @@ impl ViewerApp {
         } else if let Some(shown) = shown_for {
             ctx.request_repaint_after(auto.after.saturating_sub(shown));
         }
+    }
+}
+
+/// CPU time used so far by this process's threads (Linux), split into the render's (its
+/// workers and session thread) and everything else: the UI thread, the software rasteriser's
+/// threads (llvmpipe runs in the process), the convergence thread. In clock ticks.
+#[derive(Clone, Copy, Debug)]
+pub struct CpuTicks {
+    render: u64,
+    other: u64,
+}
+
+impl CpuTicks {
+    pub fn now() -> Option<CpuTicks> {
+        let mut ticks = CpuTicks {
+            render: 0,
+            other: 0,
+        };
+        for task in std::fs::read_dir("/proc/self/task").ok()?.flatten() {
+            let comm = std::fs::read_to_string(task.path().join("comm")).unwrap_or_default();
+            let stat = std::fs::read_to_string(task.path().join("stat")).unwrap_or_default();
+            // utime and stime are fields 14 and 15; the name in parentheses may hold spaces.
+            let after_name = stat.rsplit_once(')').map_or("", |(_, rest)| rest);
+            let fields: Vec<&str> = after_name.split_whitespace().collect();
+            let used: u64 = fields
+                .get(11..13)
+                .map_or(0, |f| f.iter().filter_map(|v| v.parse::<u64>().ok()).sum());
+            if comm.starts_with("caustica-worker") || comm.starts_with("caustica-sessio") {
+                ticks.render += used;
+            } else {
+                ticks.other += used;
+            }
+        }
+        Some(ticks)
+    }
+
+    /// The share of all cores the threads other than the render's used since `before`,
+    /// `elapsed` ago (100 clock ticks a second, as Linux reports them to processes).
+    pub fn ui_share_since(&self, before: &CpuTicks, elapsed: Duration) -> f64 {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+        let used = self.other.saturating_sub(before.other) as f64 / 100.0;
+        used / (cores * elapsed.as_secs_f64()).max(1e-9)
     }
 }
 

@@ -1,9 +1,9 @@
 //! How often the render's progress redraws the window. A redraw costs a UI frame on the same
 //! cores the render uses. On a GPU that is a millisecond, and progress redraws up to 30 times
-//! a second. With software rendering (lavapipe, llvmpipe) a 1280 x 800 window costs about
-//! 85 ms of CPU per frame on a two-core machine (measured: 11.7 frames/s while redrawing
-//! continuously), so progress redraws twice a second there, which keeps the UI's share of
-//! the cores under a tenth. A frame that comes after a quiet spell (the first image of a new
+//! a second. With software rendering (lavapipe, llvmpipe) a frame of a 1280 x 800 window
+//! costs some 40 to 50 ms of CPU on a two-core machine (the rasteriser's threads, the UI
+//! thread and the X server's copy, measured per thread), so progress redraws twice a second
+//! there, which keeps the UI's share of the cores near a twentieth. A frame that comes after a quiet spell (the first image of a new
 //! render) redraws at once, and input redraws at once, as egui always does.
 
 use eframe::egui;

@@ -8,10 +8,13 @@
 #   - UI frames per second while the render's progress alone redraws the window (paced),
 #     and while it redraws continuously, as when the user drags a slider (--animate): the
 #     mean from the first image to the screenshot;
+#   - the UI's share of the CPU while progress alone redraws: the CPU time of the viewer's
+#     threads other than the render's (the UI thread, lavapipe's rasteriser threads), from
+#     the first pass to the screenshot, over both cores (the X server's copy of each frame,
+#     another process, is not counted: about a fifth of that again, measured per process);
 #   - render throughput with the viewer open (paced) against the headless command, both in
-#     their steady state: the viewer's from its first pass to the screenshot, the command's
-#     from the difference of a 2 s and a 12 s run.
-# Usage (about 8 minutes): bash app/docs/viewer/measure.sh
+#     their steady state, from the first pass on (`--stats`' steady_samples_per_second).
+# Usage (about 10 minutes): bash app/docs/viewer/measure.sh
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 cargo build --release -q
@@ -38,24 +41,24 @@ viewer() { # integrator width height extra-flags... -> the JSON record's path
   echo "${out%.png}.json"
 }
 
-# The headless command's steady rate: the difference of a short and a long run, so that
-# start-up (scene load, BVH build, first pass) cancels, as it does in the viewer's figure.
-headless_samples() { # integrator width height seconds -> "samples seconds"
+# The headless command's steady rate (from its first pass on, as the viewer's).
+headless_rate() { # integrator width height seconds -> samples per second
   "$bin" render assets/cornell-glass.gltf -o "$work/h.exr" --integrator "$1" --width "$2" \
-    --height "$3" --time "$4" 2>&1 | tail -1 |
-    sed -E 's/.* passes, ([0-9]+) samples in ([0-9.]+) s.*/\1 \2/'
+    --height "$3" --time "$4" --stats "$work/h.json" >/dev/null 2>&1
+  field "$work/h.json" steady_samples_per_second
 }
 
-table="| integrator | size | first image after load (after launch) | first pass | UI frames/s paced | UI frames/s redrawing | render samples/s, viewer / headless |
-| --- | --- | --- | --- | --- | --- | --- |"
+# A first launch after a build reads the binary and the drivers from disk: warm them up.
+viewer pt 320 240 >/dev/null
+
+table="| integrator | size | first image after load (after launch) | first pass | UI frames/s paced | UI frames/s redrawing | UI share of the CPU, paced | render samples/s, viewer / headless |
+| --- | --- | --- | --- | --- | --- | --- | --- |"
 for integrator in pt bdpt mmlt ppm sppm pppm; do
   for size in "640 480" "1280 720"; do
     set -- $size
     paced=$(viewer "$integrator" "$1" "$2")
     animated=$(viewer "$integrator" "$1" "$2" --animate)
-    short=$(headless_samples "$integrator" "$1" "$2" 2)
-    long=$(headless_samples "$integrator" "$1" "$2" $((seconds + 2)))
-    h_rate=$(echo "$short $long" | awk '{ printf "%.3g", ($3 - $1) / ($4 - $2) }')
+    h_rate=$(headless_rate "$integrator" "$1" "$2" $((seconds + 2)) | awk '{ printf "%.3g", $1 }')
     v_rate=$(field "$paced" steady_samples_per_second | awk '{ printf "%.3g", $1 }')
     ratio=$(awk -v v="$v_rate" -v h="$h_rate" 'BEGIN { printf "%.2f", v / h }')
     first_pass=$(field "$paced" first_pass_seconds)
@@ -63,9 +66,10 @@ for integrator in pt bdpt mmlt ppm sppm pppm; do
     loaded=$(field "$paced" scene_loaded_seconds)
     first=$(field "$paced" first_frame_seconds)
     after_load=$(awk -v f="$first" -v l="$loaded" 'BEGIN { printf "%.2f", f - l }')
-    row=$(printf "| %s | %s x %s | %s s (%.2f s) | %s s | %.1f | %.1f | %s / %s (%s) |" "$integrator" \
-      "$1" "$2" "$after_load" "$first" "$first_pass" "$(field "$paced" ui_fps)" \
-      "$(field "$animated" ui_fps)" "$v_rate" "$h_rate" "$ratio")
+    share=$(field "$paced" ui_cpu_share | awk '{ printf "%.1f %%", 100 * $1 }')
+    row=$(printf "| %s | %s x %s | %s s (%.2f s) | %s s | %.1f | %.1f | %s | %s / %s (%s) |" \
+      "$integrator" "$1" "$2" "$after_load" "$first" "$first_pass" "$(field "$paced" ui_fps)" \
+      "$(field "$animated" ui_fps)" "$share" "$v_rate" "$h_rate" "$ratio")
     table="$table
 $row"
     echo "$row"
