@@ -238,18 +238,11 @@ pub fn measure(
     progress: &dyn Fn(f64),
 ) -> anyhow::Result<Vec<Record>> {
     let session = Session::start(SessionConfig {
-        scene: m.scene.clone(),
-        integrator: spec.integrator.clone(),
         params: spec.given.clone(),
-        width: m.width,
-        height: m.height,
         seed: m.seed,
         threads: m.threads,
-        max_passes: None,
         time_limit: Some(Duration::from_secs_f64(m.seconds)),
-        on_frame: None,
-        target_rel_mse: None,
-        background: false,
+        ..SessionConfig::new(m.scene.clone(), &spec.integrator, m.width, m.height)
     })
     .map_err(|e| anyhow!("{}: {e}", spec.label()))?;
     let mut records = Vec::new();

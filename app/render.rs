@@ -189,18 +189,13 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         _ => None,
     };
     let session = Session::start(SessionConfig {
-        scene: scene.clone(),
-        integrator: info.name.to_string(),
         params: args.params.given.clone(),
-        width,
-        height,
         seed: args.seed,
         threads: args.threads,
         max_passes: spp,
         time_limit: args.time.map(Duration::from_secs_f64),
-        on_frame: None,
         target_rel_mse: args.until_error,
-        background: false,
+        ..SessionConfig::new(scene.clone(), info.name, width, height)
     })
     .map_err(|e| match e {
         // The parameters are checked here, once, against this integrator's ranges.

@@ -239,19 +239,11 @@ fn the_convergence_plot_measures_the_render_against_a_reference() {
     let dir = std::env::temp_dir().join(format!("caustica-viewer-ref-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let reference = dir.join("reference.exr");
+    let scene = Arc::new(load(&asset("cornell-box.gltf")).unwrap());
     let frame = Session::start(SessionConfig {
-        scene: Arc::new(load(&asset("cornell-box.gltf")).unwrap()),
-        integrator: "pt".into(),
-        params: Default::default(),
-        width: 96,
-        height: 72,
         seed: 1234,
-        threads: 0,
         max_passes: Some(256),
-        time_limit: None,
-        on_frame: None,
-        target_rel_mse: None,
-        background: false,
+        ..SessionConfig::new(scene, "pt", 96, 72)
     })
     .unwrap()
     .wait();

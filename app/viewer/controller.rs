@@ -151,19 +151,14 @@ impl RenderController {
         };
         // The old session renders on until the new one has started: a start that fails (a
         // parameter out of range) keeps what the user had.
+        let scene = loaded.scene.clone();
         let session = Session::start(SessionConfig {
-            scene: loaded.scene.clone(),
-            integrator: settings.integrator.clone(),
             params: settings.params.clone(),
-            width: settings.width,
-            height: settings.height,
             seed: settings.seed,
             threads: settings.threads,
-            max_passes: None,
-            time_limit: None,
             on_frame: Some(self.on_frame.clone()),
-            target_rel_mse: None,
             background: true,
+            ..SessionConfig::new(scene, &settings.integrator, settings.width, settings.height)
         })
         .map_err(|e| e.to_string())?;
         if let Some(old) = self.session.replace(session) {

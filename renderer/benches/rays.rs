@@ -167,21 +167,8 @@ fn bench_cancel(c: &mut Criterion) {
         b.iter_custom(|iters| {
             let mut total = std::time::Duration::ZERO;
             for _ in 0..iters {
-                let session = Session::start(SessionConfig {
-                    scene: scene.clone(),
-                    integrator: "pt".into(),
-                    params: Default::default(),
-                    width: 512,
-                    height: 512,
-                    seed: 0,
-                    threads: 0,
-                    max_passes: None,
-                    time_limit: None,
-                    on_frame: None,
-                    target_rel_mse: None,
-                    background: false,
-                })
-                .unwrap();
+                let session =
+                    Session::start(SessionConfig::new(scene.clone(), "pt", 512, 512)).unwrap();
                 std::thread::sleep(std::time::Duration::from_millis(150));
                 let start = std::time::Instant::now();
                 session.cancel();

@@ -51,6 +51,28 @@ pub struct SessionConfig {
 
 pub type FrameCallback = Arc<dyn Fn() + Send + Sync>;
 
+impl SessionConfig {
+    /// `integrator` on `scene` at `width` x `height` with its default parameters, seed 0, a
+    /// thread per core, no limit (it renders until cancelled), at normal priority and with no
+    /// callback: callers change what they need with struct update syntax.
+    pub fn new(scene: Arc<Scene>, integrator: &str, width: u32, height: u32) -> SessionConfig {
+        SessionConfig {
+            scene,
+            integrator: integrator.to_string(),
+            params: ParamValues::default(),
+            width,
+            height,
+            seed: 0,
+            threads: 0,
+            max_passes: None,
+            time_limit: None,
+            target_rel_mse: None,
+            background: false,
+            on_frame: None,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RunState {
     Running,

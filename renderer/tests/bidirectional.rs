@@ -379,23 +379,16 @@ fn a_scene_whose_light_cannot_reach_the_camera_is_black_with_a_message() {
         ..Default::default()
     };
     for integrator in ["bdpt", "mmlt"] {
+        let scene = Arc::new(Scene::build(desc.clone()).unwrap());
         let session = Session::start(SessionConfig {
-            scene: Arc::new(Scene::build(desc.clone()).unwrap()),
-            integrator: integrator.into(),
             params: mmlt_params(&[])
                 .into_iter()
                 .filter(|_| integrator == "mmlt")
                 .map(|(k, v)| (k.to_string(), v))
                 .collect(),
-            width: 16,
-            height: 16,
             seed: 1,
-            threads: 0,
             max_passes: Some(4),
-            time_limit: None,
-            on_frame: None,
-            target_rel_mse: None,
-            background: false,
+            ..SessionConfig::new(scene, integrator, 16, 16)
         })
         .unwrap();
         let frame = session.wait();
@@ -466,19 +459,13 @@ fn bdpt_and_mmlt_images_do_not_depend_on_the_thread_count() {
         ),
     ] {
         let run = |threads| {
+            let scene = Arc::new(Scene::build(cornell_box(true)).unwrap());
             let session = Session::start(SessionConfig {
-                scene: Arc::new(Scene::build(cornell_box(true)).unwrap()),
-                integrator: integrator.into(),
                 params: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-                width: 24,
-                height: 24,
                 seed: 5,
                 threads,
                 max_passes: Some(6),
-                time_limit: None,
-                on_frame: None,
-                target_rel_mse: None,
-                background: false,
+                ..SessionConfig::new(scene, integrator, 24, 24)
             })
             .unwrap();
             (*session.wait().image).clone()

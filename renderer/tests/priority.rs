@@ -1,7 +1,6 @@
 //! Worker priority: a background session's workers run below normal priority. In a file of
 //! its own, so that no other test's workers run in the process while it counts them.
 
-use caustica_renderer::integrators::ParamValues;
 use caustica_renderer::procedural::cornell_box;
 use caustica_renderer::scene::Scene;
 use caustica_renderer::session::{Session, SessionConfig};
@@ -9,19 +8,12 @@ use std::sync::Arc;
 use std::time::Duration;
 
 fn config(background: bool) -> SessionConfig {
+    let scene = Arc::new(Scene::build(cornell_box(false)).unwrap());
     SessionConfig {
-        scene: Arc::new(Scene::build(cornell_box(false)).unwrap()),
-        integrator: "pt".into(),
-        params: ParamValues::new(),
-        width: 32,
-        height: 32,
         seed: 1,
         threads: 2,
-        max_passes: None,
-        time_limit: None,
-        on_frame: None,
-        target_rel_mse: None,
         background,
+        ..SessionConfig::new(scene, "pt", 32, 32)
     }
 }
 

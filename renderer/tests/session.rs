@@ -1,7 +1,6 @@
 //! Progressive sessions: frames while rendering, pause and resume, cancellation, parameters,
 //! and the bundled assets being exactly what their generator writes.
 
-use caustica_renderer::integrators::ParamValues;
 use caustica_renderer::procedural::{bundled_assets, cornell_box};
 use caustica_renderer::scene::Scene;
 use caustica_renderer::session::{RunState, Session, SessionConfig, SessionError};
@@ -9,19 +8,12 @@ use std::sync::Arc;
 use std::time::Duration;
 
 fn config(passes: Option<u64>) -> SessionConfig {
+    let scene = Arc::new(Scene::build(cornell_box(true)).unwrap());
     SessionConfig {
-        scene: Arc::new(Scene::build(cornell_box(true)).unwrap()),
-        integrator: "pt".into(),
-        params: ParamValues::new(),
-        width: 64,
-        height: 64,
         seed: 1,
         threads: 2,
         max_passes: passes,
-        time_limit: None,
-        on_frame: None,
-        target_rel_mse: None,
-        background: false,
+        ..SessionConfig::new(scene, "pt", 64, 64)
     }
 }
 

@@ -20,22 +20,16 @@ pub fn render(
     seed: u64,
     threads: usize,
 ) -> (Image, u64) {
+    let scene = Arc::new(Scene::build(desc).unwrap());
     let session = Session::start(SessionConfig {
-        scene: Arc::new(Scene::build(desc).unwrap()),
-        integrator: integrator.into(),
         params: params
             .iter()
             .map(|(k, v)| (k.to_string(), *v))
             .collect::<ParamValues>(),
-        width: size,
-        height: size,
         seed,
         threads,
         max_passes: Some(passes),
-        time_limit: None,
-        on_frame: None,
-        target_rel_mse: None,
-        background: false,
+        ..SessionConfig::new(scene, integrator, size, size)
     })
     .unwrap();
     let frame = session.wait();
