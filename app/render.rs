@@ -266,10 +266,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             "rays": frame.rays,
             "dropped_samples": frame.dropped,
             "elapsed_seconds": secs,
-            "steady_samples_per_second": first_pass.and_then(|(samples, elapsed)| {
-                let seconds = frame.elapsed.saturating_sub(elapsed).as_secs_f64();
-                (seconds > 0.0).then(|| (frame.samples - samples) as f64 / seconds)
-            }),
+            "steady_samples_per_second": first_pass.and_then(|p| frame.samples_per_second_since(p)),
             "threads": run.threads,
             "messages": *frame.messages,
             "estimated_relmse": estimate.map(|e| e.rel_mse),

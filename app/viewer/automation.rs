@@ -106,16 +106,11 @@ impl ViewerApp {
             let (exposure, curve) = (self.settings.exposure, self.settings.tone_curve);
             let pixels_per_point = ctx.pixels_per_point();
             let interval = self.progress.interval();
-            let rendered = self
-                .controller
-                .frame()
-                .map(|f| (f.passes, f.samples, f.elapsed));
-            let steady_rate = rendered.zip(t.first_pass_progress).and_then(
-                |((_, samples, elapsed), (samples0, elapsed0))| {
-                    let seconds = elapsed.saturating_sub(elapsed0).as_secs_f64();
-                    (seconds > 0.0).then(|| (samples - samples0) as f64 / seconds)
-                },
-            );
+            let current = self.controller.frame();
+            let rendered = current.as_ref().map(|f| (f.passes, f.samples, f.elapsed));
+            let steady_rate = current
+                .zip(t.first_pass_progress)
+                .and_then(|(f, first)| f.samples_per_second_since(first));
             let ui_cpu_share = t
                 .first_pass_cpu
                 .as_ref()

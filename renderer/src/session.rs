@@ -115,6 +115,15 @@ pub struct Frame {
     pub preparation: Option<f32>,
 }
 
+impl Frame {
+    /// Samples per second from an earlier frame's `(samples, elapsed)` to this one: the
+    /// render's steady rate when the earlier frame is the first pass (start-up excluded).
+    pub fn samples_per_second_since(&self, (samples, elapsed): (u64, Duration)) -> Option<f64> {
+        let seconds = self.elapsed.saturating_sub(elapsed).as_secs_f64();
+        (seconds > 0.0).then(|| self.samples.saturating_sub(samples) as f64 / seconds)
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum SessionError {
     #[error("unknown integrator '{0}' (known: {1})")]
@@ -461,14 +470,12 @@ fn run(
         });
     };
     // Something of the scene at once, however long the first pass takes.
-    let preview = pool
-        .install(|| preview::render(&ctx, &shared.cancel))
-        .ok()
-        .map(Arc::new);
-    if let Some(image) = &preview {
+    let preview = pool.install(|| preview::render(&ctx, &shared.cancel)).ok();
+    let previewed = preview.is_some();
+    if let Some(image) = preview {
         let first = shared.frame.load_full();
         show(Frame {
-            image: image.clone(),
+            image: Arc::new(image),
             elapsed: start.elapsed(),
             preview: true,
             ..(*first).clone()
@@ -534,7 +541,7 @@ fn run(
                 // of the first pass.
                 let image = progress
                     .map(|_| integrator.image())
-                    .filter(|image| preview.is_none() || !too_sparse(image, totals.samples));
+                    .filter(|image| !previewed || !too_sparse(image, totals.samples));
                 let Some(image) = image else {
                     let shown = shared.frame.load_full();
                     show(Frame {
