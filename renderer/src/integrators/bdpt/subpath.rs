@@ -14,7 +14,8 @@ use glam::{Vec2, Vec3};
 /// How a walk ends besides its vertex budget.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Termination {
-    /// Russian roulette on each bounce's throughput factor, from the third vertex on (BDPT).
+    /// Russian roulette on the subpath's throughput relative to its start, from the third
+    /// vertex on (BDPT), as the path tracer's.
     Roulette,
     /// Exactly the budget or nothing (MMLT's chains have a fixed path length).
     Fixed,
@@ -106,6 +107,12 @@ impl<S: SampleSource> Walker<'_, S> {
     ) {
         let (scene, sampler) = (self.scene, &mut *self.sampler);
         let mut pdf_fwd = pdf_dir;
+        // Roulette compares the throughput with where it started (a light subpath starts at
+        // the light's power), with the 1/eta^2 of radiance through refractions factored out
+        // (pbrt-v4 section 13.4.4), so that it ends paths whose contribution has become
+        // small, not those that merely passed a surface that compresses radiance.
+        let start = beta.max_element();
+        let mut eta_scale = 1.0f32;
         while path.len() < max_vertices {
             *self.rays += 1;
             let Some(si) = scene.intersect(&ray) else {
@@ -135,17 +142,19 @@ impl<S: SampleSource> Walker<'_, S> {
                 pdf_fwd = 0.0;
                 pdf_rev = 0.0;
             }
-            let mut weight = next.weight;
+            beta *= next.weight;
+            if mode == TransportMode::Radiance && next.sample.eta != 1.0 {
+                eta_scale *= next.sample.eta * next.sample.eta;
+            }
+            if !beta.is_finite() || beta == Vec3::ZERO {
+                return;
+            }
             if self.termination == Termination::Roulette && n >= 3 {
-                let survive = weight.max_element().min(1.0);
+                let survive = (beta.max_element() * eta_scale / start).min(1.0);
                 if !(sampler.get_1d() < survive) {
                     return;
                 }
-                weight /= survive;
-            }
-            beta *= weight;
-            if !beta.is_finite() || beta == Vec3::ZERO {
-                return;
+                beta /= survive;
             }
             let (head, tail) = path.split_at_mut(n - 1);
             head[n - 2].pdf_rev = tail[0].convert_density(pdf_rev, &head[n - 2], scene);
