@@ -73,7 +73,7 @@ impl Film {
             .map(|(s, o)| (*s - *o) / n_even)
             .collect();
         let reference_sq =
-            error_estimate::robust_reference_sq(&[odd, even], self.width, self.height);
+            error_estimate::robust_reference_sq(&[odd, even], None, self.width, self.height);
         let pixels: Vec<PixelError> = (0..self.sum.len())
             .into_par_iter()
             .map(|i| PixelError {
@@ -83,6 +83,16 @@ impl Film {
             })
             .collect();
         ErrorEstimate::from_pixels(self.width, self.height, &pixels)
+    }
+
+    /// Pixel `i`'s estimate (the mean of its passes; zero before the first).
+    pub fn mean(&self, i: usize) -> DVec3 {
+        self.sum[i] / self.passes.max(1) as f64
+    }
+
+    /// The variance of pixel `i`'s estimate, from the spread of its passes (zero before two).
+    pub fn variance_of_mean(&self, i: usize) -> DVec3 {
+        error_estimate::variance_of_mean(self.sum[i], self.sum_sq[i], self.passes)
     }
 
     /// The mean of all passes so far (black before the first).

@@ -249,6 +249,25 @@ fn mmlt_reproduces_the_closed_forms_at_every_extreme_of_its_parameters() {
     }
 }
 
+/// Paths shorter than `FIRST_CHAIN_LENGTH` are path traced apart from the chains, and the two
+/// parts add up: in the emissive sphere truncated at D bounces, L = Le (1 - rho^(D+1)) /
+/// (1 - rho), for D = 0 and 1 (no chains at all), 2 (chains of one length) and 3.
+#[test]
+fn mmlt_direct_part_and_chains_add_up_at_every_small_depth() {
+    let (le, rho) = (0.2f64, 0.8f64);
+    for max_depth in 0..=3 {
+        let exact = le * (1.0 - rho.powi(max_depth + 1)) / (1.0 - rho);
+        let params = mmlt_params(&[("max_depth", max_depth as f64)]);
+        let (img, dropped) = render(emissive_sphere(0.2, 0.8, 64), "mmlt", &params, 64, 16, 1, 0);
+        assert_eq!(dropped, 0);
+        let m = mean(&img);
+        assert!(
+            (m / exact - 1.0).abs() < 0.01,
+            "max depth {max_depth}: mean {m}, exact {exact}"
+        );
+    }
+}
+
 /// Block means and standard errors of the average of independent runs (one per seed).
 fn block_means_over_seeds(
     integrator: &str,
@@ -343,7 +362,8 @@ fn the_technique_histogram_counts_every_step() {
         let stats = mmlt.render_counted_pass(pass, &cancel).unwrap();
         steps += stats.samples;
     }
-    steps -= 10_000 * 7; // the bootstrap's samples
+    // The bootstrap's samples: lengths 2 to 6 (shorter paths are path traced, not chained).
+    steps -= 10_000 * 5;
     let h = mmlt.histogram();
     // 300 pixels over 37 chains: 9 steps each, 333 a pass.
     assert_eq!(steps, 5 * 37 * 9);
@@ -420,7 +440,19 @@ fn a_chain_in_a_zero_state_moves_on() {
     let mut scratch = Subpaths::default();
     let mut rays = 0;
     let black = (0..1000u64)
-        .map(|key| Chain::start(&scene, &camera, 1, key, 1 << 40, 2, &mut scratch, &mut rays))
+        .map(|key| {
+            Chain::start(
+                &scene,
+                &camera,
+                1,
+                key,
+                1 << 40,
+                2,
+                2,
+                &mut scratch,
+                &mut rays,
+            )
+        })
         .find(|c| c.current_luminance() == 0.0);
     let mut chain = black.expect("some bootstrap samples of 2 bounces are black");
     let mut histogram = TechniqueHistogram::new(2);

@@ -87,7 +87,7 @@ pub struct Row<S> {
 /// corner plus the sampler's first 2D draw) and returns the pixel's value; `scratch` is
 /// reused from pixel to pixel of a row (path vertex buffers). Splats are added to `buffer`
 /// after every row is done, in row order.
-fn pixel_pass<S: Default + Send>(
+pub(crate) fn pixel_pass<S: Default + Send>(
     buffer: &mut [Vec3],
     width: usize,
     seed: u64,

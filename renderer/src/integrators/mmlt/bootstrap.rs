@@ -5,7 +5,8 @@
 
 use crate::camera::PerspectiveCamera;
 use crate::integrators::Cancelled;
-use crate::integrators::mmlt::path_sample::{Subpaths, evaluate};
+use crate::integrators::mmlt::FIRST_CHAIN_LENGTH;
+use crate::integrators::mmlt::path_sample::{Subpaths, evaluate, slot_count, slot_lengths};
 use crate::sampling::distribution::Distribution1D;
 use crate::sampling::pss::PssSampler;
 use crate::scene::Scene;
@@ -52,17 +53,28 @@ pub fn evaluate_samples(
     max_depth: usize,
     cancel: &AtomicBool,
 ) -> Result<Vec<Evaluation>, Cancelled> {
-    let lengths = max_depth + 1;
-    (samples.start * lengths..samples.end * lengths)
+    let slots = slot_count(max_depth);
+    (samples.start * slots..samples.end * slots)
         .into_par_iter()
         .map_init(Subpaths::default, |scratch, key| {
             if key % 1024 == 0 && cancel.load(Ordering::Relaxed) {
                 return Err(Cancelled);
             }
-            let (i, k) = (key / lengths, key % lengths);
-            let mut sampler = PssSampler::new(seed, bootstrap_key(i, k, max_depth), 0.0, 1.0);
+            let (i, slot) = (key / slots, key % slots);
+            if slot < FIRST_CHAIN_LENGTH {
+                // Path traced apart (module `mmlt`): no chain samples these lengths.
+                return Ok(Evaluation {
+                    luminance: 0.0,
+                    rays: 0,
+                    invalid: false,
+                    l: glam::Vec3::ZERO,
+                    raster: glam::Vec2::ZERO,
+                });
+            }
+            let mut sampler = PssSampler::new(seed, bootstrap_key(i, slot, max_depth), 0.0, 1.0);
             let mut rays = 0;
-            let sample = evaluate(scene, camera, &mut sampler, k, scratch, &mut rays);
+            let lengths = slot_lengths(slot, max_depth);
+            let sample = evaluate(scene, camera, &mut sampler, lengths, scratch, &mut rays);
             Ok(Evaluation {
                 luminance: sample.luminance() as f64,
                 rays,

@@ -7,16 +7,18 @@
 use crate::camera::PerspectiveCamera;
 use crate::integrators::Cancelled;
 use crate::integrators::mmlt::histogram::TechniqueHistogram;
-use crate::integrators::mmlt::path_sample::{PathSample, Subpaths, evaluate};
+use crate::integrators::mmlt::path_sample::{PathSample, Subpaths, evaluate, slot_lengths};
 use crate::sampling::pss::PssSampler;
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
+use std::ops::RangeInclusive;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 pub struct Chain {
     sampler: PssSampler,
-    /// Path length in bounces.
-    pub k: usize,
+    /// The slot (`path_sample::slot_lengths`) whose path lengths the chain samples.
+    pub slot: usize,
+    lengths: RangeInclusive<usize>,
     current: PathSample,
     current_y: f32,
 }
@@ -30,6 +32,9 @@ pub struct ChainOutput {
     pub large_step_sum: f64,
     pub large_step_sum_sq: f64,
     pub large_steps: u64,
+    /// The large steps' proposals that reach the camera (pixel, L): independent of the
+    /// chain's state, so an unbiased image of the chain's lengths, as the bootstrap's.
+    pub large_step_splats: Vec<(usize, Vec3)>,
     pub rays: u64,
     pub dropped: u64,
 }
@@ -42,7 +47,7 @@ fn pixel_of(camera: &PerspectiveCamera, raster: Vec2) -> usize {
 }
 
 impl Chain {
-    /// A chain started from the bootstrap state `bootstrap_key` of length `k`, mutated from
+    /// A chain started from the bootstrap state `bootstrap_key` of slot `slot`, mutated from
     /// then on by its own `chain_key`.
     pub fn start(
         scene: &Scene,
@@ -50,17 +55,20 @@ impl Chain {
         seed: u64,
         bootstrap_key: u64,
         chain_key: u64,
-        k: usize,
+        slot: usize,
+        max_depth: usize,
         scratch: &mut Subpaths,
         rays: &mut u64,
     ) -> Chain {
+        let lengths = slot_lengths(slot, max_depth);
         let mut sampler = PssSampler::new(seed, bootstrap_key, 0.01, 0.3);
-        let current = evaluate(scene, camera, &mut sampler, k, scratch, rays);
+        let current = evaluate(scene, camera, &mut sampler, lengths.clone(), scratch, rays);
         sampler.accept();
         sampler.rekey(chain_key);
         Chain {
             sampler,
-            k,
+            slot,
+            lengths,
             current_y: current.luminance(),
             current,
         }
@@ -96,7 +104,7 @@ impl Chain {
                 scene,
                 camera,
                 &mut self.sampler,
-                self.k,
+                self.lengths.clone(),
                 scratch,
                 &mut out.rays,
             );
@@ -108,6 +116,10 @@ impl Chain {
                 out.large_step_sum += y as f64;
                 out.large_step_sum_sq += (y as f64) * (y as f64);
                 out.large_steps += 1;
+                if y > 0.0 {
+                    out.large_step_splats
+                        .push((pixel_of(camera, proposed.raster), proposed.l));
+                }
             }
             // A current state of zero luminance accepts any proposal (DESIGN.md section 5).
             let a = if self.current_y > 0.0 {
@@ -127,9 +139,8 @@ impl Chain {
             }
             let accepted = self.sampler.accept_uniform() < a;
             histogram.record(
-                self.k,
-                self.current.s,
-                proposed.s,
+                (self.current.k, self.current.s),
+                (proposed.k, proposed.s),
                 self.sampler.is_large_step(),
                 accepted,
             );

@@ -57,28 +57,27 @@ impl TechniqueHistogram {
         }
     }
 
-    /// Records one step of a chain of length `k`: the proposal's technique, whether it was a
-    /// large step, whether it was accepted, and the technique of the state the chain is in
-    /// afterwards.
+    /// Records one step of a chain from state (k, s) `current` to proposal `proposed`: the
+    /// proposal's kind and acceptance under its own length, a change of technique (or of
+    /// length) if it was one, and the step under the state the chain is in afterwards.
     pub fn record(
         &mut self,
-        k: usize,
-        current_s: usize,
-        proposed_s: usize,
+        current: (usize, usize),
+        proposed: (usize, usize),
         large: bool,
         accepted: bool,
     ) {
-        let stats = &mut self.lengths[k];
+        let stats = &mut self.lengths[proposed.0];
         if large {
             stats.large.record(accepted);
         } else {
             stats.small.record(accepted);
         }
-        if proposed_s != current_s {
+        if proposed != current {
             stats.technique_change.record(accepted);
         }
-        let s = if accepted { proposed_s } else { current_s };
-        stats.steps_in_technique[s] += 1;
+        let (k, s) = if accepted { proposed } else { current };
+        self.lengths[k].steps_in_technique[s] += 1;
     }
 
     pub fn merge(&mut self, o: &TechniqueHistogram) {

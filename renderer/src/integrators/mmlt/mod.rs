@@ -4,6 +4,16 @@
 //! path, targeting the MIS-weighted contribution, so a chain settles on the techniques that
 //! suit each region (DESIGN.md section 5).
 //!
+//! Light that reaches the camera in fewer than `FIRST_CHAIN_LENGTH` bounces (emitters seen
+//! directly, direct illumination) is not left to the chains: each pass also renders it by path
+//! tracing to that depth, one stratified sample per pixel (Mitsuba's MLT integrators do the
+//! same, their `directSamples`). The chains' target is proportional to brightness, so they
+//! spent their steps where the image is brightest, not where it is hard: on the Cornell box
+//! with glass, half of b was emitters seen directly (k = 0) and a fifth direct light (k = 1),
+//! which one camera ray and one shadow ray per pixel estimate with next to no noise, so
+//! seven chain steps in ten went where they gained nothing. The two parts estimate disjoint
+//! sets of paths, so the image is their sum and its variance the sum of theirs.
+//!
 //! A pass is width x height steps shared equally among the chains; chains run in parallel
 //! and their splats are merged in chain order. Before the first pass the bootstrap runs in
 //! preparation steps (`Integrator::preparing`) of growing size, and the image meanwhile is the
@@ -34,9 +44,15 @@
 //! with 10^4 bootstrap samples per length, the estimate was a ninth of the true error. Seeding
 //! each from its own share but letting each draw its own mix of lengths made them disagree
 //! more: a group with one chain of a length weighs it as much as one with a hundred (a
-//! noisier image, and an estimate up to three times the error). What the groups share, the normalisation b, adds its own
-//! relative variance times x^2: the bootstrap's and large steps' spread of target values per
-//! length over their count.
+//! noisier image, and an estimate up to three times the error). What the groups share, the
+//! normalisation b, adds its own relative variance times x^2: the bootstrap's and large
+//! steps' spread of target values per length over their count. The direct part adds its own
+//! variance (its passes are independent). The denominator r^2 comes from the groups'
+//! estimates and, for pixels only one group has found, from the image of the large-step
+//! proposals alone (`error_estimate::robust_reference_sq`): a large step ignores the chain's
+//! state, so those proposals are independent uniform samples of each length, as the
+//! bootstrap's, and each pass's, weighted by pixels over the expected number of large steps
+//! of its length, is an unbiased image.
 
 pub mod bootstrap;
 pub mod chain;
@@ -44,15 +60,18 @@ pub mod histogram;
 pub mod path_sample;
 
 use crate::error_estimate::{self, ErrorEstimate, PixelError};
+use crate::film::Film;
 use crate::image::Image;
+use crate::integrators::path_tracer::PathSettings;
+use crate::integrators::pixel_pass::{PixelEstimator, Row, pixel_pass};
 use crate::integrators::{
     Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PlotKind, PlotSeries, RenderContext,
 };
 use crate::sampling::sampler::Sampler;
 use chain::{Chain, ChainOutput};
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use histogram::TechniqueHistogram;
-use path_sample::Subpaths;
+use path_sample::{Subpaths, slot_count};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -127,6 +146,11 @@ const CHAIN_SEEDING: u64 = 0x3e7a_0c4a_1a55_0001;
 /// per pixel for the cost of 4 splat buffers (96 bytes a pixel).
 pub const CHAIN_GROUPS: usize = 4;
 const CHAIN_KEYS: u64 = 1 << 62;
+/// The shortest path, in bounces, that chains sample; shorter ones are path traced per pixel
+/// (module docs).
+pub const FIRST_CHAIN_LENGTH: usize = 2;
+/// Keeps the direct pass's random numbers apart from the chains' and the bootstrap's.
+const DIRECT_SEEDING: u64 = 0x5d1e_c7a1_1d1e_0002;
 
 enum Phase {
     /// The bootstrap runs, a chunk of samples per preparation step: the target values so far
@@ -167,20 +191,37 @@ pub struct Mmlt {
     b_standard_error: f64,
     histogram: TechniqueHistogram,
     bootstrap_per_length: Vec<f64>,
+    /// Paths shorter than `FIRST_CHAIN_LENGTH`, path traced one sample per pixel and pass.
+    direct: Film,
+    direct_buffer: Vec<Vec3>,
+    /// Some direct pass found light.
+    direct_lit: bool,
+    /// Sum over passes of each pass's image from its large-step proposals alone, and how many
+    /// passes it holds: an estimate of the chains' part independent of where they linger,
+    /// for the error estimate's denominator (module docs).
+    large_step_image: Vec<DVec3>,
+    large_step_passes: u64,
 }
 
 impl Mmlt {
     pub fn new(ctx: RenderContext, settings: MmltSettings) -> Self {
-        let pixels = (ctx.camera.width * ctx.camera.height) as usize;
-        Mmlt {
-            ctx,
-            settings,
-            phase: Phase::Bootstrapping {
+        let (w, h) = (ctx.camera.width as usize, ctx.camera.height as usize);
+        let pixels = w * h;
+        let phase = if (settings.max_depth as usize) < FIRST_CHAIN_LENGTH {
+            // Every path is short enough for the direct pass: no chain has anything to do.
+            Phase::Black
+        } else {
+            Phase::Bootstrapping {
                 luminance: Vec::new(),
                 rays: 0,
                 dropped: 0,
                 splats: vec![DVec3::ZERO; pixels],
-            },
+            }
+        };
+        Mmlt {
+            ctx,
+            settings,
+            phase,
             group_splats: vec![vec![DVec3::ZERO; pixels]; CHAIN_GROUPS],
             steps: 0,
             steps_per_chain: 0,
@@ -188,7 +229,37 @@ impl Mmlt {
             b_standard_error: 0.0,
             histogram: TechniqueHistogram::new(settings.max_depth as usize),
             bootstrap_per_length: Vec::new(),
+            direct: Film::new(w, h),
+            direct_buffer: vec![Vec3::ZERO; pixels],
+            direct_lit: false,
+            large_step_image: vec![DVec3::ZERO; pixels],
+            large_step_passes: 0,
         }
+    }
+
+    /// One pass of the paths the chains leave out (module docs): path tracing to
+    /// `FIRST_CHAIN_LENGTH - 1` bounces, one sample per pixel. Its rays and dropped samples
+    /// count in the pass's statistics, its samples do not (MMLT's samples are chain steps).
+    fn direct_pass(&mut self, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
+        let settings = PathSettings {
+            max_depth: self.settings.max_depth.min(FIRST_CHAIN_LENGTH as u32 - 1),
+            rr_depth: FIRST_CHAIN_LENGTH as u32,
+        };
+        let ctx = &self.ctx;
+        let stats = pixel_pass(
+            &mut self.direct_buffer,
+            self.direct.width,
+            ctx.seed ^ DIRECT_SEEDING,
+            self.direct.passes(),
+            cancel,
+            |film, row: &mut Row<()>| settings.sample_pixel(ctx, film, row),
+        )?;
+        self.direct.add_pass(&self.direct_buffer);
+        self.direct_lit |= self.direct_buffer.iter().any(|v| *v != Vec3::ZERO);
+        Ok(PassStats {
+            samples: 0,
+            ..stats
+        })
     }
 
     /// What turns a group's weighted splats into its estimate of the image: pixels over the
@@ -235,7 +306,7 @@ impl Mmlt {
     ) -> Result<(), Cancelled> {
         let (scene, camera, seed) = (&*self.ctx.scene, &self.ctx.camera, self.ctx.seed);
         let max_depth = self.settings.max_depth as usize;
-        let (lengths, total) = (max_depth + 1, self.settings.bootstrap as usize);
+        let (lengths, total) = (slot_count(max_depth), self.settings.bootstrap as usize);
         let Phase::Bootstrapping {
             luminance,
             rays,
@@ -260,7 +331,7 @@ impl Mmlt {
         }
         stats.rays += evaluated.iter().map(|e| e.rays).sum::<u64>();
         stats.dropped += evaluated.iter().filter(|e| e.invalid).count() as u64;
-        stats.samples += evaluated.len() as u64;
+        stats.samples += (chunk.len() * (lengths - FIRST_CHAIN_LENGTH)) as u64;
         if chunk.end < total {
             return Ok(());
         }
@@ -286,7 +357,7 @@ impl Mmlt {
             self.phase = Phase::Black;
             return Ok(());
         }
-        let lengths = max_depth + 1;
+        let lengths = slot_count(max_depth);
         let groups = CHAIN_GROUPS.min(self.settings.chains as usize);
         let seeding = bootstrap::Seeding::new(&boot.luminance, lengths, groups);
         // Every chain's length first; chains of each length are then dealt to the groups in
@@ -321,6 +392,7 @@ impl Mmlt {
                     bootstrap::bootstrap_key(i, k, max_depth),
                     CHAIN_KEYS + c as u64,
                     k,
+                    max_depth,
                     scratch,
                     &mut rays,
                 );
@@ -330,7 +402,7 @@ impl Mmlt {
         stats.rays += chains.iter().map(|c| c.2).sum::<u64>();
         let mut per_length = vec![vec![0u64; lengths]; groups];
         for (chain, group, _) in &chains {
-            per_length[*group][chain.k] += 1;
+            per_length[*group][chain.slot] += 1;
         }
         // Each group's image misses the lengths it has no chain of; the image, their mean,
         // misses the mean share.
@@ -377,7 +449,7 @@ impl Integrator for Mmlt {
     fn preparing(&self) -> Option<f32> {
         match &self.phase {
             Phase::Bootstrapping { luminance, .. } => {
-                let lengths = self.settings.max_depth as usize + 1;
+                let lengths = slot_count(self.settings.max_depth as usize);
                 Some((luminance.len() / lengths) as f32 / self.settings.bootstrap.max(1) as f32)
             }
             _ => None,
@@ -385,7 +457,7 @@ impl Integrator for Mmlt {
     }
 
     fn render_pass(&mut self, _pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
-        let mut stats = PassStats::default();
+        let mut stats = self.direct_pass(cancel)?;
         if self.preparing().is_some() {
             self.bootstrap_step(&mut stats, cancel)?;
             return Ok(stats);
@@ -437,16 +509,33 @@ impl Integrator for Mmlt {
         let b: Vec<f64> = (0..b_sum.len())
             .map(|k| b_sum[k] / b_count[k] as f64)
             .collect();
+        // A large step is proposed with probability p_large at each of a slot's steps, so the
+        // pass proposes chains_k x steps x p_large of them in expectation: each one landing in
+        // a pixel adds L times pixels over that count, an unbiased image (as the bootstrap's).
+        let large_steps_expected: Vec<f64> = (0..b.len())
+            .map(|k| {
+                let chains_k: u64 = chains_per_length.iter().map(|g| g[k]).sum();
+                (chains_k * steps) as f64 * p_large as f64
+            })
+            .collect();
+        let large_step_pass = p_large > 0.0;
+        self.large_step_passes += u64::from(large_step_pass);
         for (c, ((out, histogram), chain)) in results.into_iter().zip(chains.iter()).enumerate() {
             let g = chain_groups[c];
-            let weight = b[chain.k] / chains_per_length[g][chain.k].max(1) as f64;
+            if large_step_pass {
+                let weight = pixels as f64 / large_steps_expected[chain.slot];
+                for (i, v) in &out.large_step_splats {
+                    self.large_step_image[*i] += v.as_dvec3() * weight;
+                }
+            }
+            let weight = b[chain.slot] / chains_per_length[g][chain.slot].max(1) as f64;
             let group = &mut self.group_splats[g];
             for (i, v) in out.splats {
                 group[i] += v.as_dvec3() * weight;
             }
-            b_sum[chain.k] += out.large_step_sum;
-            b_sum_sq[chain.k] += out.large_step_sum_sq;
-            b_count[chain.k] += out.large_steps;
+            b_sum[chain.slot] += out.large_step_sum;
+            b_sum_sq[chain.slot] += out.large_step_sum_sq;
+            b_count[chain.slot] += out.large_steps;
             self.histogram.merge(&histogram);
             self.steps += steps;
             stats.samples += steps;
@@ -462,28 +551,31 @@ impl Integrator for Mmlt {
             self.ctx.camera.width as usize,
             self.ctx.camera.height as usize,
         );
-        let mut img = Image::new(w, h);
+        let mut img = self.direct.image();
         if let Phase::Bootstrapping {
             luminance, splats, ..
         } = &self.phase
         {
-            let done = luminance.len() / (self.settings.max_depth as usize + 1);
+            let done = luminance.len() / slot_count(self.settings.max_depth as usize);
             let scale = (w * h) as f64 / done.max(1) as f64;
             for (p, s) in img.pixels.iter_mut().zip(splats) {
-                *p = crate::film::sanitize((*s * scale).as_vec3()).unwrap_or_default();
+                *p += crate::film::sanitize((*s * scale).as_vec3()).unwrap_or_default();
             }
         }
         if let Some(scale) = self.group_scale() {
             let scale = scale / self.groups().max(1) as f64;
             for (i, p) in img.pixels.iter_mut().enumerate() {
                 let s: DVec3 = self.group_splats.iter().map(|g| g[i]).sum();
-                *p = crate::film::sanitize((s * scale).as_vec3()).unwrap_or_default();
+                *p += crate::film::sanitize((s * scale).as_vec3()).unwrap_or_default();
             }
         }
         img
     }
 
     fn error_estimate(&self) -> Option<ErrorEstimate> {
+        if matches!(self.phase, Phase::Black) {
+            return self.direct.error_estimate();
+        }
         let scale = self.group_scale()?;
         let Phase::Running {
             groups,
@@ -513,11 +605,28 @@ impl Integrator for Mmlt {
             self.ctx.camera.width as usize,
             self.ctx.camera.height as usize,
         );
+        // Each group's estimate of the whole image: its chains' part plus the direct part,
+        // which all groups share (it adds its own variance below, not to the spread).
         let estimates: Vec<Vec<DVec3>> = self.group_splats[..groups]
             .iter()
-            .map(|splats| splats.par_iter().map(|v| *v * scale).collect())
+            .map(|splats| {
+                splats
+                    .par_iter()
+                    .enumerate()
+                    .map(|(i, v)| *v * scale + self.direct.mean(i))
+                    .collect()
+            })
             .collect();
-        let reference_sq = error_estimate::robust_reference_sq(&estimates, w, h);
+        let large_steps: Option<Vec<DVec3>> = (self.large_step_passes > 0).then(|| {
+            let passes = self.large_step_passes as f64;
+            self.large_step_image
+                .par_iter()
+                .enumerate()
+                .map(|(i, v)| *v / passes + self.direct.mean(i))
+                .collect()
+        });
+        let reference_sq =
+            error_estimate::robust_reference_sq(&estimates, large_steps.as_deref(), w, h);
         let pixels: Vec<PixelError> = (0..w * h)
             .into_par_iter()
             .map(|i| {
@@ -526,9 +635,11 @@ impl Integrator for Mmlt {
                     .iter()
                     .map(|e| (e[i] - mean) * (e[i] - mean))
                     .sum();
-                let x = mean;
+                let chains = mean - self.direct.mean(i);
                 PixelError {
-                    variance: spread / (g * (g - 1.0)) + x * x * b_relative_variance,
+                    variance: spread / (g * (g - 1.0))
+                        + chains * chains * b_relative_variance
+                        + self.direct.variance_of_mean(i),
                     bias_sq: DVec3::ZERO,
                     reference_sq: reference_sq[i],
                 }
@@ -599,7 +710,7 @@ impl Integrator for Mmlt {
 
     fn messages(&self) -> Vec<String> {
         let mut m = Vec::new();
-        if matches!(self.phase, Phase::Black) {
+        if matches!(self.phase, Phase::Black) && !self.direct_lit {
             m.push("Nothing reaches the camera: every bootstrap path was black.".into());
         }
         if self.unsampled_share > 0.0 {

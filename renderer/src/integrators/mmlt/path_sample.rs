@@ -8,6 +8,15 @@
 //!
 //! Deviation: for k = 0 only (s, t) = (0, 2) is used (n = 1): (1, 1) would connect a light
 //! point to the pinhole directly, which BDPT never evaluates, and (2, 0) cannot hit a pinhole.
+//!
+//! Long paths carry little of the image, but a chain of every length up to a maximum depth of
+//! 64 would cost a bootstrap per length (most of the time before the first image, for a few
+//! percent of the light) and chains that starve. So the lengths from `MULTIPLEXED_FROM` on
+//! share one family of chains the same way the techniques of one length do: the connection
+//! stream's first number picks (k, s) among all techniques of all those lengths, uniformly,
+//! and the contribution is multiplied by their number (the same argument as eq. 7, over k
+//! as well as s). A chain then moves between long lengths as it moves between techniques,
+//! and spends its steps on each in proportion to its share of the light.
 
 use crate::camera::PerspectiveCamera;
 use crate::geometry::luminance;
@@ -18,10 +27,31 @@ use crate::sampling::pss::{CAMERA_STREAM, CONNECTION_STREAM, LIGHT_STREAM, PssSa
 use crate::sampling::sampler::SampleSource;
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
+use std::ops::RangeInclusive;
 
-/// One evaluation: the technique chosen, the contribution and where it lands on the film.
+/// The first path length whose chains sample every longer length too (module docs).
+pub const MULTIPLEXED_FROM: usize = 10;
+
+/// The number of slots, sets of path lengths with chains of their own, for `max_depth`:
+/// one per length below `MULTIPLEXED_FROM` and one for all the others.
+pub fn slot_count(max_depth: usize) -> usize {
+    max_depth.min(MULTIPLEXED_FROM) + 1
+}
+
+/// The path lengths that the chains of slot `slot` sample.
+pub fn slot_lengths(slot: usize, max_depth: usize) -> RangeInclusive<usize> {
+    if slot < MULTIPLEXED_FROM {
+        slot..=slot
+    } else {
+        MULTIPLEXED_FROM..=max_depth
+    }
+}
+
+/// One evaluation: the path length and technique chosen, the contribution and where it
+/// lands on the film.
 #[derive(Clone, Copy, Debug)]
 pub struct PathSample {
+    pub k: usize,
     pub s: usize,
     pub l: Vec3,
     pub raster: Vec2,
@@ -66,6 +96,7 @@ mod tests {
             Vec3::new(1.0, 1.0, -1e-3),
         ] {
             let mut s = PathSample {
+                k: 1,
                 s: 1,
                 l,
                 raster: Vec2::ZERO,
@@ -75,6 +106,7 @@ mod tests {
             assert_eq!(s.l, Vec3::ZERO);
         }
         let mut ok = PathSample {
+            k: 0,
             s: 0,
             l: Vec3::ONE,
             raster: Vec2::ZERO,
@@ -96,26 +128,30 @@ pub fn technique_count(k: usize) -> usize {
     if k == 0 { 1 } else { k + 2 }
 }
 
-/// Evaluates the state of `sampler` as a path of `k` bounces.
+/// Evaluates the state of `sampler` as a path whose number of bounces is in `lengths`.
 pub fn evaluate(
     scene: &Scene,
     camera: &PerspectiveCamera,
     sampler: &mut PssSampler,
-    k: usize,
+    lengths: RangeInclusive<usize>,
     scratch: &mut Subpaths,
     rays: &mut u64,
 ) -> PathSample {
     sampler.start_stream(CONNECTION_STREAM, 0);
-    let n = technique_count(k);
-    let s = if k == 0 {
-        0
-    } else {
-        ((sampler.get_1d() * n as f32) as usize).min(n - 1)
-    };
+    let n: usize = lengths.clone().map(technique_count).sum();
+    let (mut k, mut s) = (*lengths.start(), 0);
+    if n > 1 {
+        s = ((sampler.get_1d() * n as f32) as usize).min(n - 1);
+        while s >= technique_count(k) {
+            s -= technique_count(k);
+            k += 1;
+        }
+    }
     let t = k + 2 - s;
     sampler.start_stream(CAMERA_STREAM, 0);
     let film = sampler.get_2d() * Vec2::new(camera.width as f32, camera.height as f32);
     let zero = PathSample {
+        k,
         s,
         l: Vec3::ZERO,
         raster: film,
@@ -148,6 +184,7 @@ pub fn evaluate(
         true,
     ) {
         Some(c) => PathSample {
+            k,
             s,
             l: c.l * (c.mis * n as f32),
             raster: c.raster.unwrap_or(film),

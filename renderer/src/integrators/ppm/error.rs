@@ -94,7 +94,7 @@ impl PhotonMapper {
             .map(|p| (p.estimate_sum - p.odd_estimate_sum) / n_even)
             .collect();
         let (w, h) = (image.width, image.height);
-        let robust = error_estimate::robust_reference_sq(&[odd, even], w, h);
+        let robust = error_estimate::robust_reference_sq(&[odd, even], None, w, h);
         // The kernel bias lifts x on the dark side of every edge, just where the squared bias
         // is largest relative to r^2: r is taken below x by the bias estimate there, the
         // pixel's own where it stands out of its noise, else the neighbourhood's mean (the
