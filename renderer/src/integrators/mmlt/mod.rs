@@ -119,7 +119,7 @@ impl MmltSettings {
         .integer(),
         ParamSpec::new(
             "max_depth",
-            "Longest path, in bounces; each length has its own chains.",
+            "Longest path, in bounces. Paths of 0 and 1 bounce are path traced; each longer length up to 9 has its own chains, and the lengths from 10 on share one family.",
             10.0,
             (0.0, 64.0),
         )
@@ -607,24 +607,19 @@ impl Integrator for Mmlt {
         );
         // Each group's estimate of the whole image: its chains' part plus the direct part,
         // which all groups share (it adds its own variance below, not to the spread).
+        let direct: Vec<DVec3> = (0..w * h).map(|i| self.direct.mean(i)).collect();
+        let plus_direct = |part: &[DVec3], scale: f64| -> Vec<DVec3> {
+            part.par_iter()
+                .zip(&direct)
+                .map(|(v, d)| *v * scale + *d)
+                .collect()
+        };
         let estimates: Vec<Vec<DVec3>> = self.group_splats[..groups]
             .iter()
-            .map(|splats| {
-                splats
-                    .par_iter()
-                    .enumerate()
-                    .map(|(i, v)| *v * scale + self.direct.mean(i))
-                    .collect()
-            })
+            .map(|splats| plus_direct(splats, scale))
             .collect();
-        let large_steps: Option<Vec<DVec3>> = (self.large_step_passes > 0).then(|| {
-            let passes = self.large_step_passes as f64;
-            self.large_step_image
-                .par_iter()
-                .enumerate()
-                .map(|(i, v)| *v / passes + self.direct.mean(i))
-                .collect()
-        });
+        let large_steps = (self.large_step_passes > 0)
+            .then(|| plus_direct(&self.large_step_image, 1.0 / self.large_step_passes as f64));
         let reference_sq =
             error_estimate::robust_reference_sq(&estimates, large_steps.as_deref(), w, h);
         let pixels: Vec<PixelError> = (0..w * h)
@@ -635,7 +630,7 @@ impl Integrator for Mmlt {
                     .iter()
                     .map(|e| (e[i] - mean) * (e[i] - mean))
                     .sum();
-                let chains = mean - self.direct.mean(i);
+                let chains = mean - direct[i];
                 PixelError {
                     variance: spread / (g * (g - 1.0))
                         + chains * chains * b_relative_variance

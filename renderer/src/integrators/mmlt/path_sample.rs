@@ -16,7 +16,10 @@
 //! stream's first number picks (k, s) among all techniques of all those lengths, uniformly,
 //! and the contribution is multiplied by their number (the same argument as eq. 7, over k
 //! as well as s). A chain then moves between long lengths as it moves between techniques,
-//! and spends its steps on each in proportion to its share of the light.
+//! and spends its steps on each in proportion to its share of the light. Its large steps do
+//! not: they pick lengths by their number of techniques, mostly the longest, which carry
+//! next to nothing, and weigh the rare bright ones by that number. Measured at max depth 64
+//! (20 s): several times the error of depth 10 on the bundled scenes, so the default stays 10.
 
 use crate::camera::PerspectiveCamera;
 use crate::geometry::luminance;
