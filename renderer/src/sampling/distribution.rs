@@ -1,5 +1,7 @@
 //! Piecewise-constant discrete distribution, used to choose lights in proportion to power.
 
+use crate::sampling::sampler::ONE_MINUS_EPSILON;
+
 /// Discrete distribution over `weights.len()` items. Negative or non-finite weights count as
 /// zero; if every weight is zero, the distribution is uniform so that sampling stays defined.
 #[derive(Clone, Debug)]
@@ -66,6 +68,16 @@ impl Distribution1D {
         }
         Some((i, self.pmf[i]))
     }
+
+    /// As `sample`, with `u`'s position within the item's interval of the CDF as a new
+    /// uniform number in [0, 1) (pbrt-v4's `SampleDiscrete` and its `uRemapped`), so one
+    /// number can make a second choice within the item.
+    pub fn sample_remapped(&self, u: f32) -> Option<(usize, f32, f32)> {
+        let (i, p) = self.sample(u)?;
+        let (start, width) = (self.cdf[i], self.cdf[i + 1] - self.cdf[i]);
+        let remapped = ((u as f64 - start) / width).clamp(0.0, 1.0) as f32;
+        Some((i, p, remapped.min(ONE_MINUS_EPSILON)))
+    }
 }
 
 #[cfg(test)]
@@ -92,5 +104,16 @@ mod tests {
         let d = Distribution1D::new(&[0.0, f64::NAN, -1.0]);
         assert!((d.pmf(1) - 1.0 / 3.0).abs() < 1e-6);
         assert!(Distribution1D::new(&[]).sample(0.3).is_none());
+    }
+
+    #[test]
+    fn remapped_numbers_are_uniform_within_the_item() {
+        let d = Distribution1D::new(&[1.0, 0.0, 3.0]);
+        let (i, p, r) = d.sample_remapped(0.125).unwrap();
+        assert_eq!((i, p), (0, 0.25));
+        assert!((r - 0.5).abs() < 1e-6);
+        let (i, _, r) = d.sample_remapped(0.625).unwrap();
+        assert_eq!(i, 2);
+        assert!((r - 0.5).abs() < 1e-6);
     }
 }

@@ -7,6 +7,7 @@ use crate::camera::PerspectiveCamera;
 use crate::integrators::Cancelled;
 use crate::integrators::mmlt::FIRST_CHAIN_LENGTH;
 use crate::integrators::mmlt::path_sample::{Subpaths, evaluate, slot_count, slot_lengths};
+use crate::integrators::mmlt::technique_choice::TechniqueChoice;
 use crate::sampling::distribution::Distribution1D;
 use crate::sampling::pss::PssSampler;
 use crate::scene::Scene;
@@ -33,10 +34,11 @@ pub fn bootstrap_key(i: usize, k: usize, max_depth: usize) -> u64 {
     (i * (max_depth + 1) + k) as u64
 }
 
-/// One bootstrap evaluation: its target value, the rays it traced, whether its contribution
-/// was invalid (dropped), and its contribution and film position, which the image shown while
-/// the bootstrap runs sums (`Mmlt::image`).
+/// One bootstrap evaluation: its path length and target value, the rays it traced, whether
+/// its contribution was invalid (dropped), and its contribution and film position, which the
+/// image shown while the bootstrap runs sums (`Mmlt::image`).
 pub struct Evaluation {
+    pub k: usize,
     pub luminance: f64,
     pub rays: u64,
     pub invalid: bool,
@@ -64,6 +66,7 @@ pub fn evaluate_samples(
             if slot < FIRST_CHAIN_LENGTH {
                 // Path traced apart (module `mmlt`): no chain samples these lengths.
                 return Ok(Evaluation {
+                    k: slot,
                     luminance: 0.0,
                     rays: 0,
                     invalid: false,
@@ -73,9 +76,10 @@ pub fn evaluate_samples(
             }
             let mut sampler = PssSampler::new(seed, bootstrap_key(i, slot, max_depth), 0.0, 1.0);
             let mut rays = 0;
-            let lengths = slot_lengths(slot, max_depth);
-            let sample = evaluate(scene, camera, &mut sampler, lengths, scratch, &mut rays);
+            let choice = TechniqueChoice::for_slot(slot_lengths(slot, max_depth));
+            let sample = evaluate(scene, camera, &mut sampler, &choice, scratch, &mut rays);
             Ok(Evaluation {
+                k: sample.k,
                 luminance: sample.luminance() as f64,
                 rays,
                 invalid: !sample.is_valid(),

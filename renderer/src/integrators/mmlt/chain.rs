@@ -8,17 +8,17 @@ use crate::camera::PerspectiveCamera;
 use crate::integrators::Cancelled;
 use crate::integrators::mmlt::histogram::TechniqueHistogram;
 use crate::integrators::mmlt::path_sample::{PathSample, Subpaths, evaluate, slot_lengths};
+use crate::integrators::mmlt::technique_choice::TechniqueChoice;
 use crate::sampling::pss::PssSampler;
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
-use std::ops::RangeInclusive;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 pub struct Chain {
     sampler: PssSampler,
     /// The slot (`path_sample::slot_lengths`) whose path lengths the chain samples.
     pub slot: usize,
-    lengths: RangeInclusive<usize>,
+    choice: TechniqueChoice,
     current: PathSample,
     current_y: f32,
 }
@@ -48,7 +48,8 @@ fn pixel_of(camera: &PerspectiveCamera, raster: Vec2) -> usize {
 
 impl Chain {
     /// A chain started from the bootstrap state `bootstrap_key` of slot `slot`, mutated from
-    /// then on by its own `chain_key`.
+    /// then on by its own `chain_key`; it picks techniques as the bootstrap did.
+    #[allow(clippy::too_many_arguments)]
     pub fn start(
         scene: &Scene,
         camera: &PerspectiveCamera,
@@ -60,15 +61,15 @@ impl Chain {
         scratch: &mut Subpaths,
         rays: &mut u64,
     ) -> Chain {
-        let lengths = slot_lengths(slot, max_depth);
+        let choice = TechniqueChoice::for_slot(slot_lengths(slot, max_depth));
         let mut sampler = PssSampler::new(seed, bootstrap_key, 0.01, 0.3);
-        let current = evaluate(scene, camera, &mut sampler, lengths.clone(), scratch, rays);
+        let current = evaluate(scene, camera, &mut sampler, &choice, scratch, rays);
         sampler.accept();
         sampler.rekey(chain_key);
         Chain {
             sampler,
             slot,
-            lengths,
+            choice,
             current_y: current.luminance(),
             current,
         }
@@ -104,7 +105,7 @@ impl Chain {
                 scene,
                 camera,
                 &mut self.sampler,
-                self.lengths.clone(),
+                &self.choice,
                 scratch,
                 &mut out.rays,
             );

@@ -58,6 +58,7 @@ pub mod bootstrap;
 pub mod chain;
 pub mod histogram;
 pub mod path_sample;
+pub mod technique_choice;
 
 use crate::error_estimate::{self, ErrorEstimate, PixelError};
 use crate::film::Film;
@@ -74,6 +75,7 @@ use histogram::TechniqueHistogram;
 use path_sample::{Subpaths, slot_count};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 pub struct MmltSettings {
@@ -119,7 +121,7 @@ impl MmltSettings {
         .integer(),
         ParamSpec::new(
             "max_depth",
-            "Longest path, in bounces. Paths of 0 and 1 bounce are path traced; each longer length up to 9 has its own chains, and the lengths from 10 on share one family.",
+            "Longest path, in bounces. Paths of 0 and 1 bounce are path traced; each longer length up to 9 has its own chains, and the lengths from 10 on share one family, which visits the shorter ones more often.",
             10.0,
             (0.0, 64.0),
         )
@@ -154,10 +156,11 @@ const DIRECT_SEEDING: u64 = 0x5d1e_c7a1_1d1e_0002;
 
 enum Phase {
     /// The bootstrap runs, a chunk of samples per preparation step: the target values so far
-    /// (every length of each sample), with the rays traced and samples dropped, and the
-    /// samples' contributions summed per pixel.
+    /// (every slot of each sample), summed per path length, with the rays traced and samples
+    /// dropped, and the samples' contributions summed per pixel.
     Bootstrapping {
         luminance: Vec<f64>,
+        per_path_length: Vec<f64>,
         rays: u64,
         dropped: u64,
         splats: Vec<DVec3>,
@@ -191,6 +194,8 @@ pub struct Mmlt {
     b_standard_error: f64,
     histogram: TechniqueHistogram,
     bootstrap_per_length: Vec<f64>,
+    /// b per path length from the bootstrap (the shared slot's lengths apart).
+    bootstrap_per_path_length: Vec<f64>,
     /// Paths shorter than `FIRST_CHAIN_LENGTH`, path traced one sample per pixel and pass.
     direct: Film,
     direct_buffer: Vec<Vec3>,
@@ -201,6 +206,16 @@ pub struct Mmlt {
     /// for the error estimate's denominator (module docs).
     large_step_image: Vec<DVec3>,
     large_step_passes: u64,
+    /// Wall-clock seconds spent in the bootstrap, the chains and the direct part (for the
+    /// statistics: how much of a run the bootstrap takes).
+    seconds: PhaseSeconds,
+}
+
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+struct PhaseSeconds {
+    bootstrap: f64,
+    chains: f64,
+    direct: f64,
 }
 
 impl Mmlt {
@@ -213,6 +228,7 @@ impl Mmlt {
         } else {
             Phase::Bootstrapping {
                 luminance: Vec::new(),
+                per_path_length: vec![0.0; settings.max_depth as usize + 1],
                 rays: 0,
                 dropped: 0,
                 splats: vec![DVec3::ZERO; pixels],
@@ -229,11 +245,13 @@ impl Mmlt {
             b_standard_error: 0.0,
             histogram: TechniqueHistogram::new(settings.max_depth as usize),
             bootstrap_per_length: Vec::new(),
+            bootstrap_per_path_length: Vec::new(),
             direct: Film::new(w, h),
             direct_buffer: vec![Vec3::ZERO; pixels],
             direct_lit: false,
             large_step_image: vec![DVec3::ZERO; pixels],
             large_step_passes: 0,
+            seconds: PhaseSeconds::default(),
         }
     }
 
@@ -278,6 +296,16 @@ impl Mmlt {
         }
     }
 
+    /// The share of pixels where some chain has splatted anything: where it is below the share
+    /// of pixels that paths of 2 bounces or more reach, chains have not found the rest yet.
+    pub fn chain_coverage(&self) -> f64 {
+        let pixels = self.direct.width * self.direct.height;
+        let reached = (0..pixels)
+            .filter(|&i| self.group_splats.iter().any(|g| g[i] != DVec3::ZERO))
+            .count();
+        reached as f64 / pixels.max(1) as f64
+    }
+
     pub fn histogram(&self) -> &TechniqueHistogram {
         &self.histogram
     }
@@ -309,6 +337,7 @@ impl Mmlt {
         let (lengths, total) = (slot_count(max_depth), self.settings.bootstrap as usize);
         let Phase::Bootstrapping {
             luminance,
+            per_path_length,
             rays,
             dropped,
             splats,
@@ -322,6 +351,7 @@ impl Mmlt {
         let width = camera.width as usize;
         for e in &evaluated {
             luminance.push(e.luminance);
+            per_path_length[e.k] += e.luminance;
             *rays += e.rays;
             *dropped += u64::from(e.invalid);
             let (x, y) = (e.raster.x as usize, e.raster.y as usize);
@@ -341,6 +371,8 @@ impl Mmlt {
             *rays,
             *dropped,
         );
+        let samples = total as f64;
+        self.bootstrap_per_path_length = per_path_length.iter().map(|l| l / samples).collect();
         self.start(boot, stats)
     }
 
@@ -433,35 +465,10 @@ impl Mmlt {
         };
         Ok(())
     }
-}
 
-/// Technique (s, t) of path length k, as the plots name it. For k = 0 the only technique is
-/// (0, 2) (see `path_sample`).
-pub fn technique_name(k: usize, s: usize) -> String {
-    if k == 0 {
-        "s = 0, t = 2".to_string()
-    } else {
-        format!("s = {s}, t = {}", k + 2 - s)
-    }
-}
-
-impl Integrator for Mmlt {
-    fn preparing(&self) -> Option<f32> {
-        match &self.phase {
-            Phase::Bootstrapping { luminance, .. } => {
-                let lengths = slot_count(self.settings.max_depth as usize);
-                Some((luminance.len() / lengths) as f32 / self.settings.bootstrap.max(1) as f32)
-            }
-            _ => None,
-        }
-    }
-
-    fn render_pass(&mut self, _pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
-        let mut stats = self.direct_pass(cancel)?;
-        if self.preparing().is_some() {
-            self.bootstrap_step(&mut stats, cancel)?;
-            return Ok(stats);
-        }
+    /// One pass of the chains: width x height steps shared among them, their splats added to
+    /// their groups' images, their large steps to b and the large-step image.
+    fn chains_pass(&mut self, stats: &mut PassStats, cancel: &AtomicBool) -> Result<(), Cancelled> {
         let Phase::Running {
             chains,
             chain_groups,
@@ -472,7 +479,7 @@ impl Integrator for Mmlt {
             b_count,
         } = &mut self.phase
         else {
-            return Ok(stats);
+            return Ok(());
         };
         let (scene, camera) = (&*self.ctx.scene, &self.ctx.camera);
         let pixels = (camera.width * camera.height) as u64;
@@ -543,9 +550,45 @@ impl Integrator for Mmlt {
             stats.dropped += out.dropped;
         }
         self.steps_per_chain += steps;
-        Ok(stats)
+        Ok(())
+    }
+}
+
+/// Technique (s, t) of path length k, as the plots name it. For k = 0 the only technique is
+/// (0, 2) (see `path_sample`).
+pub fn technique_name(k: usize, s: usize) -> String {
+    if k == 0 {
+        "s = 0, t = 2".to_string()
+    } else {
+        format!("s = {s}, t = {}", k + 2 - s)
+    }
+}
+
+impl Integrator for Mmlt {
+    fn preparing(&self) -> Option<f32> {
+        match &self.phase {
+            Phase::Bootstrapping { luminance, .. } => {
+                let lengths = slot_count(self.settings.max_depth as usize);
+                Some((luminance.len() / lengths) as f32 / self.settings.bootstrap.max(1) as f32)
+            }
+            _ => None,
+        }
     }
 
+    fn render_pass(&mut self, _pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
+        let started = Instant::now();
+        let mut stats = self.direct_pass(cancel)?;
+        self.seconds.direct += started.elapsed().as_secs_f64();
+        let started = Instant::now();
+        if self.preparing().is_some() {
+            self.bootstrap_step(&mut stats, cancel)?;
+            self.seconds.bootstrap += started.elapsed().as_secs_f64();
+            return Ok(stats);
+        }
+        let result = self.chains_pass(&mut stats, cancel);
+        self.seconds.chains += started.elapsed().as_secs_f64();
+        result.map(|()| stats)
+    }
     fn image(&self) -> Image {
         let (w, h) = (
             self.ctx.camera.width as usize,
@@ -726,9 +769,30 @@ impl Integrator for Mmlt {
         let mut v = self.histogram.to_json();
         v["normalisation_b"] = serde_json::json!(self.normalisation());
         v["bootstrap_b_per_length"] = serde_json::json!(self.bootstrap_per_length);
+        v["bootstrap_b_per_path_length"] = serde_json::json!(self.bootstrap_per_path_length);
         v["normalisation_standard_error"] = serde_json::json!(self.b_standard_error);
         v["share_of_b_without_chains"] = serde_json::json!(self.unsampled_share);
         v["chains"] = serde_json::json!(self.settings.chains);
+        v["seconds"] = serde_json::json!(self.seconds);
+        if let Phase::Running {
+            chains_per_length,
+            b_sum,
+            b_count,
+            ..
+        } = &self.phase
+        {
+            let chains: Vec<u64> = (0..b_sum.len())
+                .map(|k| chains_per_length.iter().map(|g| g[k]).sum())
+                .collect();
+            let b: Vec<f64> = b_sum
+                .iter()
+                .zip(b_count)
+                .map(|(s, &n)| s / n.max(1) as f64)
+                .collect();
+            v["chains_per_slot"] = serde_json::json!(chains);
+            v["b_per_slot"] = serde_json::json!(b);
+        }
+        v["share_of_pixels_reached_by_chains"] = serde_json::json!(self.chain_coverage());
         Some(v)
     }
 }

@@ -13,19 +13,18 @@
 //! 64 would cost a bootstrap per length (most of the time before the first image, for a few
 //! percent of the light) and chains that starve. So the lengths from `MULTIPLEXED_FROM` on
 //! share one family of chains the same way the techniques of one length do: the connection
-//! stream's first number picks (k, s) among all techniques of all those lengths, uniformly,
-//! and the contribution is multiplied by their number (the same argument as eq. 7, over k
-//! as well as s). A chain then moves between long lengths as it moves between techniques,
-//! and spends its steps on each in proportion to its share of the light. Its large steps do
-//! not: they pick lengths by their number of techniques, mostly the longest, which carry
-//! next to nothing, and weigh the rare bright ones by that number. Measured at max depth 64
-//! (20 s): several times the error of depth 10 on the bundled scenes, so the default stays 10.
+//! stream's first number picks (k, s) among all techniques of all those lengths
+//! (`technique_choice`), and the contribution is divided by the pick's probability (the same
+//! argument as eq. 7, over k as well as s). A chain then moves between long lengths as it
+//! moves between techniques, and spends its steps on each in proportion to its share of the
+//! light.
 
 use crate::camera::PerspectiveCamera;
 use crate::geometry::luminance;
 use crate::integrators::bdpt::connect::connect;
 use crate::integrators::bdpt::subpath::{Termination, Walker};
 use crate::integrators::bdpt::vertex::Vertex;
+use crate::integrators::mmlt::technique_choice::{Pick, TechniqueChoice};
 use crate::sampling::pss::{CAMERA_STREAM, CONNECTION_STREAM, LIGHT_STREAM, PssSampler};
 use crate::sampling::sampler::SampleSource;
 use crate::scene::Scene;
@@ -126,30 +125,21 @@ pub struct Subpaths {
     light: Vec<Vertex>,
 }
 
-/// Number of techniques for path length `k`.
-pub fn technique_count(k: usize) -> usize {
-    if k == 0 { 1 } else { k + 2 }
-}
-
-/// Evaluates the state of `sampler` as a path whose number of bounces is in `lengths`.
+/// Evaluates the state of `sampler` as a path of one of `choice`'s lengths.
 pub fn evaluate(
     scene: &Scene,
     camera: &PerspectiveCamera,
     sampler: &mut PssSampler,
-    lengths: RangeInclusive<usize>,
+    choice: &TechniqueChoice,
     scratch: &mut Subpaths,
     rays: &mut u64,
 ) -> PathSample {
     sampler.start_stream(CONNECTION_STREAM, 0);
-    let n: usize = lengths.clone().map(technique_count).sum();
-    let (mut k, mut s) = (*lengths.start(), 0);
-    if n > 1 {
-        s = ((sampler.get_1d() * n as f32) as usize).min(n - 1);
-        while s >= technique_count(k) {
-            s -= technique_count(k);
-            k += 1;
-        }
-    }
+    let Pick { k, s, weight, .. } = if choice.is_choice() {
+        choice.pick(sampler.get_1d())
+    } else {
+        choice.pick(0.0)
+    };
     let t = k + 2 - s;
     sampler.start_stream(CAMERA_STREAM, 0);
     let film = sampler.get_2d() * Vec2::new(camera.width as f32, camera.height as f32);
@@ -189,7 +179,7 @@ pub fn evaluate(
         Some(c) => PathSample {
             k,
             s,
-            l: c.l * (c.mis * n as f32),
+            l: c.l * (c.mis * weight),
             raster: c.raster.unwrap_or(film),
         },
         None => zero,
