@@ -3,7 +3,10 @@
 //! checkpoints of one progressive run the error against a reference (when given) and the
 //! error each frame estimates of itself, and writes `convergence.csv`, `convergence.png`
 //! (log-log error against time) and a table on stdout: which run wins at each time, and the
-//! fitted slope of each run's error.
+//! fitted slope of each run's error. With `--seeds N` each run is repeated with N seeds: one
+//! run of a Markov-chain estimator can be several times better or worse than the next, so
+//! the plot and the table give the median over the seeds at each checkpoint, and the table
+//! the range of the last errors.
 
 use crate::chart;
 use anyhow::{Context, anyhow};
@@ -44,9 +47,13 @@ pub struct ConvergeArgs {
     /// Image height [default: the reference's, else from the width and the camera].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_RESOLUTION)))]
     pub height: Option<u32>,
-    /// Seed of every run.
+    /// Seed of every run (the first seed with --seeds).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Repeats every run with this many seeds (--seed, --seed + 1, ...): the plot and the
+    /// table show the median over them, the table their range.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=100))]
+    pub seeds: u64,
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
@@ -93,6 +100,7 @@ pub struct Record {
     pub rmse: Option<f64>,
     pub estimated_rel_mse: Option<f64>,
     pub estimated_bias_rel_mse: Option<f64>,
+    pub seed: u64,
 }
 
 impl Record {
@@ -194,7 +202,12 @@ pub fn checkpoints(total: f64, per_decade: u32) -> Vec<f64> {
     times
 }
 
-fn record(spec: &RunSpec, frame: &Frame, reference: Option<&Image>) -> anyhow::Result<Record> {
+fn record(
+    spec: &RunSpec,
+    seed: u64,
+    frame: &Frame,
+    reference: Option<&Image>,
+) -> anyhow::Result<Record> {
     let metrics = reference
         .map(|r| compare(&frame.image, r))
         .transpose()
@@ -215,6 +228,7 @@ fn record(spec: &RunSpec, frame: &Frame, reference: Option<&Image>) -> anyhow::R
         rmse: metrics.map(|m| m.rmse),
         estimated_rel_mse: estimate.map(|e| e.rel_mse),
         estimated_bias_rel_mse: estimate.map(|e| e.bias_rel_mse),
+        seed,
     })
 }
 
@@ -224,22 +238,22 @@ pub struct Measurement<'a> {
     pub reference: Option<&'a Image>,
     pub width: u32,
     pub height: u32,
-    pub seed: u64,
     pub threads: usize,
     pub seconds: f64,
     pub checkpoints: Vec<f64>,
 }
 
-/// Renders one run for the measurement's time and records it at each checkpoint that a
-/// frame reached (a frame standing for several checkpoints is recorded once).
+/// Renders one run with one seed for the measurement's time and records it at each
+/// checkpoint that a frame reached (a frame standing for several checkpoints is recorded once).
 pub fn measure(
     m: &Measurement,
     spec: &RunSpec,
+    seed: u64,
     progress: &dyn Fn(f64),
 ) -> anyhow::Result<Vec<Record>> {
     let session = Session::start(SessionConfig {
         params: spec.given.clone(),
-        seed: m.seed,
+        seed,
         threads: m.threads,
         time_limit: Some(Duration::from_secs_f64(m.seconds)),
         ..SessionConfig::new(m.scene.clone(), &spec.integrator, m.width, m.height)
@@ -260,7 +274,7 @@ pub fn measure(
             next += 1;
         }
         if (due || done) && frame.passes > last_passes {
-            records.push(record(spec, &frame, m.reference)?);
+            records.push(record(spec, seed, &frame, m.reference)?);
             last_passes = frame.passes;
         }
         progress(frame.elapsed.as_secs_f64().min(m.seconds));
@@ -270,6 +284,49 @@ pub fn measure(
         std::thread::sleep(Duration::from_millis(5));
     }
     Ok(records)
+}
+
+/// The median of `values` (the mean of the middle two for an even count).
+fn median(mut values: Vec<f64>) -> Option<f64> {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    (n > 0).then(|| (values[(n - 1) / 2] + values[n / 2]) / 2.0)
+}
+
+/// One run's records over its seeds (`by_seed`, one list of records each) reduced to one
+/// record per checkpoint: at each checkpoint, every seed's first record at or after it, and
+/// of those the median of each error, passes and time. A checkpoint some seed did not reach
+/// (no pass finished yet) is left out.
+pub fn median_over_seeds(by_seed: &[Vec<Record>], checkpoints: &[f64]) -> Vec<Record> {
+    let mut out: Vec<Record> = Vec::new();
+    for &t in checkpoints {
+        let at: Vec<&Record> = by_seed
+            .iter()
+            .filter_map(|records| records.iter().find(|r| r.seconds >= t * 0.999))
+            .collect();
+        let Some(first) = at.first() else { continue };
+        if at.len() < by_seed.len() {
+            continue;
+        }
+        let of = |f: fn(&Record) -> Option<f64>| -> Option<f64> {
+            let values: Option<Vec<f64>> = at.iter().map(|r| f(r)).collect();
+            values.and_then(median)
+        };
+        let seconds = of(|r| Some(r.seconds)).unwrap_or(t);
+        if out.last().is_some_and(|r| r.seconds >= seconds) {
+            continue;
+        }
+        out.push(Record {
+            seconds,
+            passes: of(|r| Some(r.passes as f64)).unwrap_or(0.0).round() as u64,
+            rel_mse: of(|r| r.rel_mse),
+            rmse: of(|r| r.rmse),
+            estimated_rel_mse: of(|r| r.estimated_rel_mse),
+            estimated_bias_rel_mse: of(|r| r.estimated_bias_rel_mse),
+            ..(*first).clone()
+        });
+    }
+    out
 }
 
 /// Least-squares slope of log error against log time over the records from `from` seconds on.
@@ -354,45 +411,66 @@ pub fn run(args: &ConvergeArgs) -> Result<(), crate::render::Failure> {
         reference: reference.as_ref(),
         width,
         height,
-        seed: args.seed,
         threads: args.threads,
         seconds: args.time,
         checkpoints: checkpoints(args.time, args.checkpoints_per_decade),
     };
-    let total = args.time * specs.len() as f64;
+    let seeds: Vec<u64> = (0..args.seeds).map(|i| args.seed + i).collect();
+    let total = args.time * (specs.len() * seeds.len()) as f64;
     let bar = ProgressBar::new((total * 10.0).ceil() as u64).with_style(
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let mut all = Vec::new();
     for (i, spec) in specs.iter().enumerate() {
-        bar.set_message(format!("{} ({}/{})", spec.label(), i + 1, specs.len()));
-        let done_before = args.time * i as f64;
-        let records = measure(&m, spec, &|t| {
-            bar.set_position(((done_before + t) * 10.0) as u64)
-        })?;
-        all.push(records);
+        let mut by_seed = Vec::new();
+        for (j, &seed) in seeds.iter().enumerate() {
+            bar.set_message(format!(
+                "{} seed {seed} ({}/{})",
+                spec.label(),
+                i + 1,
+                specs.len()
+            ));
+            let done_before = args.time * (i * seeds.len() + j) as f64;
+            let records = measure(&m, spec, seed, &|t| {
+                bar.set_position(((done_before + t) * 10.0) as u64)
+            })?;
+            by_seed.push(records);
+        }
+        all.push(by_seed);
     }
     bar.finish_and_clear();
 
     let csv_path = args.out.join("convergence.csv");
     write_csv(&csv_path, &all)?;
+    let medians: Vec<Vec<Record>> = all
+        .iter()
+        .map(|by_seed| median_over_seeds(by_seed, &m.checkpoints))
+        .collect();
     let png_path = args.out.join("convergence.png");
     let title = format!(
         "{} at {width} x {height}",
         args.scene.file_name().unwrap_or_default().to_string_lossy()
     );
-    chart::draw_convergence(&png_path, &title, &all, reference.is_some())
+    let title = if seeds.len() > 1 {
+        format!("{title}, median of {} seeds", seeds.len())
+    } else {
+        title
+    };
+    chart::draw_convergence(&png_path, &title, &medians, reference.is_some())
         .map_err(|e| anyhow!("{}: cannot draw the plot: {e}", png_path.display()))?;
-    print!("{}", summary(&all, &m.checkpoints, reference.is_some()));
+    print!(
+        "{}",
+        summary(&all, &medians, &m.checkpoints, reference.is_some())
+    );
     eprintln!("wrote {} and {}", csv_path.display(), png_path.display());
     Ok(())
 }
 
-fn write_csv(path: &Path, all: &[Vec<Record>]) -> anyhow::Result<()> {
+fn write_csv(path: &Path, all: &[Vec<Vec<Record>>]) -> anyhow::Result<()> {
     let mut w = csv::Writer::from_path(path)
         .with_context(|| format!("{}: cannot write", path.display()))?;
-    for r in all.iter().flatten() {
+    for r in all.iter().flatten().flatten() {
         w.serialize(r)
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
@@ -401,15 +479,22 @@ fn write_csv(path: &Path, all: &[Vec<Record>]) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The table printed at the end: per run, its last record and fitted slope; then the winner
-/// at each decade of time (and at the end).
-pub fn summary(all: &[Vec<Record>], checkpoints: &[f64], have_reference: bool) -> String {
+/// The table printed at the end: per run, its last record and fitted slope from `medians`
+/// (`median_over_seeds` of each run's records in `all`), with the range of the seeds' last
+/// errors when there are several; then the winner at each decade of time (and at the end).
+pub fn summary(
+    all: &[Vec<Vec<Record>>],
+    medians: &[Vec<Record>],
+    checkpoints: &[f64],
+    have_reference: bool,
+) -> String {
     let what = if have_reference {
         "relMSE"
     } else {
         "estimated relMSE"
     };
-    let width = all
+    let several = all.iter().any(|by_seed| by_seed.len() > 1);
+    let width = medians
         .iter()
         .filter_map(|r| r.first())
         .map(|r| r.run.len())
@@ -417,19 +502,30 @@ pub fn summary(all: &[Vec<Record>], checkpoints: &[f64], have_reference: bool) -
         .unwrap_or(3)
         .max(3);
     let mut out = format!(
-        "{:<width$} {:>8} {:>9} {:>12} {:>12} {:>8} {:>7}\n",
+        "{:<width$} {:>8} {:>9} {:>12} {:>12} {:>8} {:>7}",
         "run", "seconds", "passes", "relMSE", "estimated", "est/true", "slope"
     );
+    if several {
+        out += &format!(" {:>21}", "seeds' range");
+    }
+    out += "\n";
     let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3e}"));
-    for records in all {
+    for (records, by_seed) in medians.iter().zip(all) {
         let Some(last) = records.last() else { continue };
-        let ratio = match (last.estimated_rel_mse, last.rel_mse) {
-            (Some(e), Some(t)) if t > 0.0 => format!("{:.2}", e / t),
-            _ => "-".into(),
-        };
+        let lasts: Vec<&Record> = by_seed.iter().filter_map(|r| r.last()).collect();
+        let ratios: Option<Vec<f64>> = lasts
+            .iter()
+            .map(|r| match (r.estimated_rel_mse, r.rel_mse) {
+                (Some(e), Some(t)) if t > 0.0 => Some(e / t),
+                _ => None,
+            })
+            .collect();
+        let ratio = ratios
+            .and_then(median)
+            .map_or("-".into(), |r| format!("{r:.2}"));
         let from = (last.seconds / 10.0).min(1.0);
         out += &format!(
-            "{:<width$} {:>8.1} {:>9} {:>12} {:>12} {:>8} {:>7}\n",
+            "{:<width$} {:>8.1} {:>9} {:>12} {:>12} {:>8} {:>7}",
             last.run,
             last.seconds,
             last.passes,
@@ -438,6 +534,13 @@ pub fn summary(all: &[Vec<Record>], checkpoints: &[f64], have_reference: bool) -
             ratio,
             fitted_slope(records, from).map_or("-".into(), |s| format!("{s:.2}"))
         );
+        if several {
+            let errors: Vec<f64> = lasts.iter().filter_map(|r| r.error()).collect();
+            let lo = errors.iter().copied().reduce(f64::min);
+            let hi = errors.iter().copied().reduce(f64::max);
+            out += &format!(" {:>21}", format!("{}..{}", fmt(lo), fmt(hi)));
+        }
+        out += "\n";
     }
     out += &format!("lowest {what}:\n");
     let mut shown = Vec::new();
@@ -448,8 +551,8 @@ pub fn summary(all: &[Vec<Record>], checkpoints: &[f64], have_reference: bool) -
             continue;
         }
         shown.push(decade);
-        if let Some((i, e)) = winner_at(all, t) {
-            out += &format!("  at {t:>8.2} s: {} ({e:.3e})\n", all[i][0].run);
+        if let Some((i, e)) = winner_at(medians, t) {
+            out += &format!("  at {t:>8.2} s: {} ({e:.3e})\n", medians[i][0].run);
         }
     }
     out
@@ -501,6 +604,43 @@ mod tests {
     }
 
     #[test]
+    fn seeds_reduce_to_their_median_at_each_checkpoint() {
+        let rec = |seed: u64, t: f64, e: f64| Record {
+            run: "mmlt".into(),
+            integrator: "mmlt".into(),
+            parameters: String::new(),
+            seconds: t,
+            passes: seed + 1,
+            rel_mse: Some(e),
+            rmse: None,
+            estimated_rel_mse: Some(2.0 * e),
+            estimated_bias_rel_mse: None,
+            seed,
+        };
+        let by_seed = vec![
+            vec![rec(0, 1.0, 4.0), rec(0, 10.0, 1.0)],
+            vec![rec(1, 1.1, 8.0), rec(1, 10.0, 3.0)],
+            vec![rec(2, 1.2, 2.0), rec(2, 10.1, 0.5)],
+        ];
+        // Nobody reached 0.5 s before 1 s: the first checkpoint's records are the first ones.
+        let m = median_over_seeds(&by_seed, &[0.5, 1.0, 10.0]);
+        assert_eq!(m.len(), 2, "{m:?}");
+        assert_eq!(
+            (m[0].seconds, m[0].rel_mse, m[0].passes),
+            (1.1, Some(4.0), 2)
+        );
+        assert_eq!(
+            (m[1].rel_mse, m[1].estimated_rel_mse),
+            (Some(1.0), Some(2.0))
+        );
+        // A checkpoint one seed never reached is left out.
+        assert_eq!(median_over_seeds(&by_seed, &[10.05]).len(), 0);
+        assert_eq!(median(vec![3.0, 1.0, 2.0, 10.0]), Some(2.5));
+        let table = summary(&[by_seed], &[m], &[1.0, 10.0], true);
+        assert!(table.contains("5.000e-1..3.000e0"), "{table}");
+    }
+
+    #[test]
     fn slopes_and_winners_follow_the_records() {
         let rec = |run: &str, t: f64, e: f64| Record {
             run: run.into(),
@@ -512,6 +652,7 @@ mod tests {
             rmse: None,
             estimated_rel_mse: None,
             estimated_bias_rel_mse: None,
+            seed: 0,
         };
         let a: Vec<Record> = [1.0, 10.0, 100.0]
             .iter()

@@ -294,7 +294,7 @@ fn converge_measures_every_run_against_the_reference() {
     assert_eq!(
         header.join(" "),
         "run integrator parameters seconds passes rel_mse rmse estimated_rel_mse \
-         estimated_bias_rel_mse"
+         estimated_bias_rel_mse seed"
     );
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
@@ -317,6 +317,21 @@ fn converge_measures_every_run_against_the_reference() {
     }
     let png = image::open(out.join("convergence.png")).unwrap();
     assert!(png.width() > 400 && png.height() > 300);
+    // Several seeds: every seed's rows, the median and the seeds' range in the table.
+    let o = run(&format!(
+        "{converge} --integrator pt --time 0.5 --seeds 2 --seed 7"
+    ));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("seeds' range"));
+    let csv = std::fs::read_to_string(out.join("convergence.csv")).unwrap();
+    for seed in ["7", "8"] {
+        assert!(
+            csv.lines()
+                .skip(1)
+                .any(|l| l.ends_with(&format!(",{seed}"))),
+            "{csv}"
+        );
+    }
     // A reference of another size is refused before anything renders.
     let o = run(&format!("{converge} --integrator pt --time 1 --width 40"));
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
