@@ -133,7 +133,8 @@ pub fn next_chunk(done: usize, total: usize) -> std::ops::Range<usize> {
 }
 
 /// Where chains start: first a path length for each chain, drawn in proportion to luminance
-/// over all bootstrap samples (so chains spread over lengths as the image's energy does);
+/// over all bootstrap samples (so chains spread over lengths as the image's energy does; the
+/// caller first gives every group one chain of each lit length, `Mmlt::start`);
 /// then, per group of chains (module `mmlt`), a bootstrap sample of that length from the
 /// group's own disjoint share of the samples (i = g, g + G, g + 2G, ...), again in proportion
 /// to luminance. The first step is shared, so every group gets the same number of chains of

@@ -401,11 +401,27 @@ impl Mmlt {
                 pick
             })
             .collect();
+        // Every group first gets one chain of each slot the bootstrap found light in, so that
+        // no group's image misses a slot (a group without one would differ from the others by
+        // that slot's whole light, and their spread is the error estimate); the rest are drawn
+        // in proportion to the light.
+        let lit: Vec<usize> = (0..lengths).filter(|&k| boot.per_length[k] > 0.0).collect();
+        let reserved = if lit.len() * groups <= picks.len() {
+            lit.len() * groups
+        } else {
+            0
+        };
         let mut dealt = vec![0usize; lengths];
         let assignments: Vec<(usize, usize, f32)> = picks
             .iter_mut()
-            .map(|pick| {
-                let k = seeding.length(pick.get_1d());
+            .enumerate()
+            .map(|(c, pick)| {
+                let u = pick.get_1d();
+                let k = if c < reserved {
+                    lit[c / groups]
+                } else {
+                    seeding.length(u)
+                };
                 let group = dealt[k] % groups;
                 dealt[k] += 1;
                 (group, k, pick.get_1d())
