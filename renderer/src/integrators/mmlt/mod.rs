@@ -605,6 +605,7 @@ impl Integrator for Mmlt {
         self.seconds.chains += started.elapsed().as_secs_f64();
         result.map(|()| stats)
     }
+
     fn image(&self) -> Image {
         let (w, h) = (
             self.ctx.camera.width as usize,
