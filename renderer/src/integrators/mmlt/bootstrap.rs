@@ -56,6 +56,9 @@ pub fn evaluate_samples(
     cancel: &AtomicBool,
 ) -> Result<Vec<Evaluation>, Cancelled> {
     let slots = slot_count(max_depth);
+    let choices: Vec<TechniqueChoice> = (0..slots)
+        .map(|slot| TechniqueChoice::for_slot(slot_lengths(slot, max_depth)))
+        .collect();
     (samples.start * slots..samples.end * slots)
         .into_par_iter()
         .map_init(Subpaths::default, |scratch, key| {
@@ -76,8 +79,14 @@ pub fn evaluate_samples(
             }
             let mut sampler = PssSampler::new(seed, bootstrap_key(i, slot, max_depth), 0.0, 1.0);
             let mut rays = 0;
-            let choice = TechniqueChoice::for_slot(slot_lengths(slot, max_depth));
-            let sample = evaluate(scene, camera, &mut sampler, &choice, scratch, &mut rays);
+            let sample = evaluate(
+                scene,
+                camera,
+                &mut sampler,
+                &choices[slot],
+                scratch,
+                &mut rays,
+            );
             Ok(Evaluation {
                 k: sample.k,
                 luminance: sample.luminance() as f64,

@@ -135,7 +135,7 @@ pub fn evaluate(
     rays: &mut u64,
 ) -> PathSample {
     sampler.start_stream(CONNECTION_STREAM, 0);
-    let Pick { k, s, weight, .. } = if choice.is_choice() {
+    let Pick { k, s, weight } = if choice.is_choice() {
         choice.pick(sampler.get_1d())
     } else {
         choice.pick(0.0)
