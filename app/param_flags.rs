@@ -117,7 +117,10 @@ mod tests {
                 );
             }
         }
-        assert!(help.contains("mmlt: default 10"), "{help}");
+        assert!(
+            help.contains("[pt, bdpt, mmlt, ppm, sppm, pppm: default 64]"),
+            "{help}"
+        );
         assert!(Cli::try_parse_from(["x", "--alpha", "many"]).is_err());
     }
 }

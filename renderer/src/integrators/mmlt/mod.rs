@@ -122,7 +122,7 @@ impl MmltSettings {
         ParamSpec::new(
             "max_depth",
             "Longest path, in bounces. Paths of 0 and 1 bounce are path traced; each longer length up to 9 has its own chains, and the lengths from 10 on share one family, which visits the shorter ones more often.",
-            10.0,
+            64.0,
             (0.0, 64.0),
         )
         .integer(),
