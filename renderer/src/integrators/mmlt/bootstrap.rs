@@ -23,6 +23,8 @@ pub struct Bootstrap {
     pub per_length_mean_sq: Vec<f64>,
     /// Standard error of b from the samples' spread.
     pub standard_error: f64,
+    /// The samples of each path length with light.
+    pub lit_per_length: Vec<u64>,
     /// The target value (luminance) of every sample, at index i (max_depth + 1) + k.
     pub luminance: Vec<f64>,
     pub rays: u64,
@@ -110,9 +112,11 @@ impl Bootstrap {
         let samples = luminance.len() / lengths.max(1);
         let mut per_length = vec![0.0; lengths];
         let mut per_length_mean_sq = vec![0.0; lengths];
+        let mut lit_per_length = vec![0; lengths];
         for (key, y) in luminance.iter().enumerate() {
             per_length[key % lengths] += y / samples as f64;
             per_length_mean_sq[key % lengths] += y * y / samples as f64;
+            lit_per_length[key % lengths] += u64::from(*y > 0.0);
         }
         // Sample i of every length together is one sample of the sum over lengths.
         let sum_sq: f64 = luminance
@@ -127,10 +131,25 @@ impl Bootstrap {
             per_length,
             per_length_mean_sq,
             standard_error: (variance / n).sqrt(),
+            lit_per_length,
             luminance,
             rays,
             dropped,
         }
+    }
+
+    /// Per path length, the effective number of distinct paths chains start from (Kish's
+    /// effective sample size of the luminance weights, (sum y)^2 / sum y^2): chains start in
+    /// proportion to luminance, so where a few bright samples carry the light most chains
+    /// start on the same few paths and, accepting few large steps, stay near them (on the
+    /// caustic pool: 87 lit samples of 10^5 at 5 bounces, 10 of them 97 % of the light).
+    pub fn effective_samples(&self) -> Vec<f64> {
+        let n = (self.luminance.len() / self.per_length.len().max(1)) as f64;
+        self.per_length
+            .iter()
+            .zip(&self.per_length_mean_sq)
+            .map(|(m, sq)| if *sq > 0.0 { n * m * m / sq } else { 0.0 })
+            .collect()
     }
 }
 
@@ -206,5 +225,33 @@ impl Seeding {
                 .map_or(group, |(j, _)| j * self.groups + group),
             None => self.per_length[k].sample(u).map_or(group, |(i, _)| i),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Equal lit values are as many distinct starts as there are; one value carrying all but
+    /// a little of the light is about one, whatever the count of dim ones; a black length none.
+    #[test]
+    fn effective_starts_count_distinct_light_not_lit_samples() {
+        let samples = 100;
+        // Length 0: 40 lit samples of equal value; length 1: one of 1000 and 99 of 0.01;
+        // length 2: black. Index i lengths + k.
+        let luminance: Vec<f64> = (0..samples)
+            .flat_map(|i| {
+                let even = if i < 40 { 2.0 } else { 0.0 };
+                let skewed = if i == 7 { 1000.0 } else { 0.01 };
+                [even, skewed, 0.0]
+            })
+            .collect();
+        let boot = Bootstrap::from_luminance(luminance, 3, 0, 0);
+        assert_eq!(boot.lit_per_length, vec![40, 100, 0]);
+        let ess = boot.effective_samples();
+        assert!((ess[0] - 40.0).abs() < 1e-9, "{ess:?}");
+        // (1000 + 0.99)^2 / (1000^2 + 99 x 10^-4) = 1.00198...
+        assert!((ess[1] - 1.00198).abs() < 1e-4, "{ess:?}");
+        assert_eq!(ess[2], 0.0);
     }
 }

@@ -151,6 +151,9 @@ const CHAIN_KEYS: u64 = 1 << 62;
 /// The shortest path, in bounces, that chains sample; shorter ones are path traced per pixel
 /// (module docs).
 pub const FIRST_CHAIN_LENGTH: usize = 2;
+/// More chains per distinct start path than this, in a slot, and the user is told
+/// (`Mmlt::few_starts`).
+const CHAINS_PER_START: f64 = 4.0;
 /// Keeps the direct pass's random numbers apart from the chains' and the bootstrap's.
 const DIRECT_SEEDING: u64 = 0x5d1e_c7a1_1d1e_0002;
 
@@ -196,6 +199,10 @@ pub struct Mmlt {
     bootstrap_per_length: Vec<f64>,
     /// b per path length from the bootstrap (the shared slot's lengths apart).
     bootstrap_per_path_length: Vec<f64>,
+    /// Per slot, the bootstrap samples with light and how many distinct paths they amount to
+    /// as chain starts (`Bootstrap::effective_samples`).
+    bootstrap_lit: Vec<u64>,
+    bootstrap_effective: Vec<f64>,
     /// Paths shorter than `FIRST_CHAIN_LENGTH`, path traced one sample per pixel and pass.
     direct: Film,
     direct_buffer: Vec<Vec3>,
@@ -246,6 +253,8 @@ impl Mmlt {
             histogram: TechniqueHistogram::new(settings.max_depth as usize),
             bootstrap_per_length: Vec::new(),
             bootstrap_per_path_length: Vec::new(),
+            bootstrap_lit: Vec::new(),
+            bootstrap_effective: Vec::new(),
             direct: Film::new(w, h),
             direct_buffer: vec![Vec3::ZERO; pixels],
             direct_lit: false,
@@ -308,6 +317,40 @@ impl Mmlt {
 
     pub fn histogram(&self) -> &TechniqueHistogram {
         &self.histogram
+    }
+
+    /// The slots whose chains outnumber `CHAINS_PER_START` times the distinct paths they
+    /// start from (`Bootstrap::effective_samples`), named for the user, e.g. "5 bounces
+    /// (456 chains, about 10 paths)"; None if there are none.
+    fn few_starts(&self) -> Option<String> {
+        let Phase::Running {
+            chains_per_length, ..
+        } = &self.phase
+        else {
+            return None;
+        };
+        let max_depth = self.settings.max_depth as usize;
+        let few: Vec<String> = (0..self.bootstrap_effective.len())
+            .filter_map(|k| {
+                let chains: u64 = chains_per_length.iter().map(|g| g[k]).sum();
+                let starts = self.bootstrap_effective[k];
+                (chains as f64 > CHAINS_PER_START * starts).then(|| {
+                    let lengths = path_sample::slot_lengths(k, max_depth);
+                    let bounces = if lengths.start() == lengths.end() {
+                        format!("{k} bounces")
+                    } else {
+                        format!("{} bounces and more", lengths.start())
+                    };
+                    let paths = if starts.round() == 1.0 {
+                        "path"
+                    } else {
+                        "paths"
+                    };
+                    format!("{bounces} ({chains} chains, about {starts:.0} {paths})")
+                })
+            })
+            .collect();
+        (!few.is_empty()).then(|| few.join(", "))
     }
 
     /// The normalisation b (None before the bootstrap).
@@ -385,6 +428,8 @@ impl Mmlt {
         let (scene, camera, seed) = (&*self.ctx.scene, &self.ctx.camera, self.ctx.seed);
         let max_depth = self.settings.max_depth as usize;
         self.bootstrap_per_length = boot.per_length.clone();
+        self.bootstrap_lit = boot.lit_per_length.clone();
+        self.bootstrap_effective = boot.effective_samples();
         if !(boot.b > 0.0) {
             self.phase = Phase::Black;
             return Ok(());
@@ -774,6 +819,12 @@ impl Integrator for Mmlt {
                 100.0 * self.unsampled_share
             ));
         }
+        if let Some(few) = self.few_starts() {
+            m.push(format!(
+                "Chains start on few distinct paths at {few}: that light stays blotchy until \
+                 the chains spread; a larger --bootstrap gives them more starts."
+            ));
+        }
         if self.settings.large_step_prob == 0.0 {
             m.push(
                 "Large-step probability 0: chains never jump and can stick in one region.".into(),
@@ -807,6 +858,8 @@ impl Integrator for Mmlt {
                 .map(|(s, &n)| s / n.max(1) as f64)
                 .collect();
             v["chains_per_slot"] = serde_json::json!(chains);
+            v["bootstrap_lit_per_slot"] = serde_json::json!(self.bootstrap_lit);
+            v["bootstrap_effective_starts_per_slot"] = serde_json::json!(self.bootstrap_effective);
             v["b_per_slot"] = serde_json::json!(b);
         }
         v["share_of_pixels_reached_by_chains"] = serde_json::json!(self.chain_coverage());
