@@ -330,9 +330,10 @@ impl Mmlt {
             return None;
         };
         let max_depth = self.settings.max_depth as usize;
+        let per_slot = chains_per_slot(chains_per_length);
         let few: Vec<String> = (0..self.bootstrap_effective.len())
             .filter_map(|k| {
-                let chains: u64 = chains_per_length.iter().map(|g| g[k]).sum();
+                let chains = per_slot[k];
                 let starts = self.bootstrap_effective[k];
                 (chains as f64 > CHAINS_PER_START * starts).then(|| {
                     let lengths = path_sample::slot_lengths(k, max_depth);
@@ -580,11 +581,9 @@ impl Mmlt {
         // A large step is proposed with probability p_large at each of a slot's steps, so the
         // pass proposes chains_k x steps x p_large of them in expectation: each one landing in
         // a pixel adds L times pixels over that count, an unbiased image (as the bootstrap's).
-        let large_steps_expected: Vec<f64> = (0..b.len())
-            .map(|k| {
-                let chains_k: u64 = chains_per_length.iter().map(|g| g[k]).sum();
-                (chains_k * steps) as f64 * p_large as f64
-            })
+        let large_steps_expected: Vec<f64> = chains_per_slot(chains_per_length)
+            .iter()
+            .map(|&chains_k| (chains_k * steps) as f64 * p_large as f64)
             .collect();
         let large_step_pass = p_large > 0.0;
         self.large_step_passes += u64::from(large_step_pass);
@@ -613,6 +612,14 @@ impl Mmlt {
         self.steps_per_chain += steps;
         Ok(())
     }
+}
+
+/// Chains of each slot over all groups, from c_{k,g} ([g][k]).
+fn chains_per_slot(chains_per_length: &[Vec<u64>]) -> Vec<u64> {
+    let slots = chains_per_length.first().map_or(0, Vec::len);
+    (0..slots)
+        .map(|k| chains_per_length.iter().map(|g| g[k]).sum())
+        .collect()
 }
 
 /// Technique (s, t) of path length k, as the plots name it. For k = 0 the only technique is
@@ -849,9 +856,7 @@ impl Integrator for Mmlt {
             ..
         } = &self.phase
         {
-            let chains: Vec<u64> = (0..b_sum.len())
-                .map(|k| chains_per_length.iter().map(|g| g[k]).sum())
-                .collect();
+            let chains = chains_per_slot(chains_per_length);
             let b: Vec<f64> = b_sum
                 .iter()
                 .zip(b_count)
