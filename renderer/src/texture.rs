@@ -1,8 +1,17 @@
-//! Image textures: linear RGBA in f32, bilinear lookup with glTF's wrap modes.
-//! glTF's texture origin is the top-left corner of the image (spec section 3.8.4.1).
+//! Image textures: texels kept as stored (8-bit RGBA, 4 bytes each, not 16 as linear f32),
+//! decoded on lookup through a table (the sRGB curve for colour, /255 for data), with
+//! bilinear filtering in linear space and glTF's wrap modes. glTF's texture origin is the
+//! top-left corner of the image (spec section 3.8.4.1).
 
 use crate::color::srgb_to_linear;
-use glam::{Vec2, Vec3, Vec4};
+use glam::{DVec3, Vec2, Vec3, Vec4};
+use std::sync::LazyLock;
+
+/// Linear value of each 8-bit code: `[srgb, data]`.
+static DECODE: LazyLock<[[f32; 256]; 2]> = LazyLock::new(|| {
+    let data = std::array::from_fn(|v| v as f32 / 255.0);
+    [data.map(srgb_to_linear), data]
+});
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Wrap {
@@ -15,7 +24,13 @@ pub enum Wrap {
 pub struct Texture {
     pub width: usize,
     pub height: usize,
-    pub texels: Vec<Vec4>,
+    /// RGBA as stored, row by row from the top.
+    texels: Vec<[u8; 4]>,
+    /// RGB is sRGB-encoded colour (alpha is always linear).
+    srgb: bool,
+    /// Mean linear RGB, computed once: every emissive triangle of a textured emitter asks for
+    /// it, and summing a 2048^2 texture per triangle took a minute on a 15,000-triangle model.
+    mean_rgb: Vec3,
     pub wrap_s: Wrap,
     pub wrap_t: Wrap,
 }
@@ -34,7 +49,8 @@ fn wrap_index(i: i64, n: usize, wrap: Wrap) -> usize {
 }
 
 impl Texture {
-    /// A texture from 8-bit RGBA, decoding the sRGB curve on RGB when `srgb` (alpha is linear).
+    /// A texture from 8-bit RGBA, whose RGB is sRGB-encoded colour when `srgb` (alpha is
+    /// linear).
     pub fn from_rgba8(
         width: usize,
         height: usize,
@@ -45,26 +61,48 @@ impl Texture {
     ) -> Texture {
         let texels = rgba
             .chunks_exact(4)
-            .map(|c| {
-                let f = |v: u8| {
-                    let x = v as f32 / 255.0;
-                    if srgb { srgb_to_linear(x) } else { x }
-                };
-                Vec4::new(f(c[0]), f(c[1]), f(c[2]), c[3] as f32 / 255.0)
-            })
+            .map(|c| [c[0], c[1], c[2], c[3]])
             .collect();
-        Texture {
+        let mut texture = Texture {
             width,
             height,
             texels,
+            srgb,
+            mean_rgb: Vec3::ONE,
             wrap_s,
             wrap_t,
+        };
+        if !texture.texels.is_empty() {
+            // In f64: millions of f32 terms summed in order lose digits.
+            let sum = texture.texels.iter().fold(DVec3::ZERO, |sum, &t| {
+                sum + texture.decode(t).truncate().as_dvec3()
+            });
+            texture.mean_rgb = (sum / texture.texels.len() as f64).as_vec3();
         }
+        texture
+    }
+
+    /// Bytes the texels take.
+    pub fn texel_bytes(&self) -> usize {
+        self.texels.len() * std::mem::size_of::<[u8; 4]>()
+    }
+
+    fn decode(&self, [r, g, b, a]: [u8; 4]) -> Vec4 {
+        let [srgb, data] = &*DECODE;
+        let rgb = if self.srgb { srgb } else { data };
+        Vec4::new(
+            rgb[r as usize],
+            rgb[g as usize],
+            rgb[b as usize],
+            data[a as usize],
+        )
     }
 
     fn texel(&self, x: i64, y: i64) -> Vec4 {
-        self.texels[wrap_index(y, self.height, self.wrap_t) * self.width
-            + wrap_index(x, self.width, self.wrap_s)]
+        self.decode(
+            self.texels[wrap_index(y, self.height, self.wrap_t) * self.width
+                + wrap_index(x, self.width, self.wrap_s)],
+        )
     }
 
     /// Bilinear lookup at texture coordinate `uv`.
@@ -82,13 +120,9 @@ impl Texture {
         top * (1.0 - fy) + bottom * fy
     }
 
-    /// Mean RGB, used to estimate the power of textured emitters.
+    /// Mean linear RGB, used to estimate the power of textured emitters.
     pub fn mean_rgb(&self) -> Vec3 {
-        if self.texels.is_empty() {
-            return Vec3::ONE;
-        }
-        let sum: Vec4 = self.texels.iter().copied().sum();
-        (sum / self.texels.len() as f32).truncate()
+        self.mean_rgb
     }
 }
 
@@ -117,5 +151,32 @@ mod tests {
         let mid = t.lookup(Vec2::new(0.5, 0.5));
         assert!((mid.x - 0.5).abs() < 1e-6);
         assert!((t.lookup(Vec2::new(0.25, 0.5)).x).abs() < 1e-6);
+    }
+
+    #[test]
+    fn texels_keep_their_bytes_and_decode_colour_through_the_srgb_curve_and_mean() {
+        let rgba = [0u8, 64, 128, 255, 200, 17, 255, 99];
+        let wrap = Wrap::ClampToEdge;
+        let colour = Texture::from_rgba8(2, 1, &rgba, true, wrap, wrap);
+        let data = Texture::from_rgba8(2, 1, &rgba, false, wrap, wrap);
+        assert_eq!(colour.texel_bytes(), 8);
+        for (i, t) in rgba.chunks_exact(4).enumerate() {
+            let centre = Vec2::new((i as f32 + 0.5) / 2.0, 0.5);
+            let (c, d) = (colour.lookup(centre), data.lookup(centre));
+            for k in 0..3 {
+                let v = t[k] as f32 / 255.0;
+                assert!((c[k] - srgb_to_linear(v)).abs() < 1e-6, "colour {i}.{k}");
+                assert!((d[k] - v).abs() < 1e-6, "data {i}.{k}");
+            }
+            // Alpha is linear in both.
+            assert!((c.w - t[3] as f32 / 255.0).abs() < 1e-6);
+        }
+        let mean = |f: fn(f32) -> f32, k: usize| {
+            0.5 * (f(rgba[k] as f32 / 255.0) + f(rgba[4 + k] as f32 / 255.0))
+        };
+        for k in 0..3 {
+            assert!((colour.mean_rgb()[k] - mean(srgb_to_linear, k)).abs() < 1e-6);
+            assert!((data.mean_rgb()[k] - mean(|v| v, k)).abs() < 1e-6);
+        }
     }
 }
