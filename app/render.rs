@@ -272,6 +272,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             "estimated_relmse": estimate.map(|e| e.rel_mse),
             "estimated_bias_relmse": estimate.map(|e| e.bias_rel_mse),
             "integrator_statistics": *frame.statistics,
+            "scene_memory_bytes": scene.memory(),
         });
         let text = serde_json::to_string_pretty(&stats).unwrap_or_default();
         std::fs::write(path, text + "\n")

@@ -228,7 +228,8 @@ fn mmlt_on_the_door_writes_its_technique_histogram() {
 }
 
 /// `--until-error` stops once the estimated relMSE falls below its value (here within a 30 s
-/// cap that a working stop never reaches), and the estimate goes to the header and --stats.
+/// cap that a working stop never reaches), and the estimate goes to the header and --stats
+/// (which also reports the scene's memory).
 #[test]
 fn render_until_an_estimated_error_and_record_it() {
     let dir = temp_dir("until");
@@ -256,6 +257,11 @@ fn render_until_an_estimated_error_and_record_it() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     assert_eq!(json["estimated_relmse"].as_f64(), Some(estimated));
+    // The scene's memory by part: triangles and BVH but no texels.
+    let memory = &json["scene_memory_bytes"];
+    assert!(memory["geometry"].as_u64() > Some(0), "{memory}");
+    assert!(memory["bvh"].as_u64() > Some(0), "{memory}");
+    assert_eq!(memory["textures"].as_u64(), Some(0), "{memory}");
     let o = render("assets/cornell-box.gltf", &out, "--until-error -1");
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     std::fs::remove_dir_all(dir).unwrap();

@@ -185,3 +185,18 @@ fn scenes_in_millimetres_and_kilometres_trace_like_metres() {
         );
     }
 }
+
+/// The memory report counts what the parts hold: positions alone are 36 bytes a triangle, the
+/// BVH keeps its own copy of them and its nodes, an untextured scene has no texels, and the
+/// lights' part holds at least the triangle-to-light map.
+#[test]
+fn scene_memory_counts_each_part() {
+    let scene = Scene::build(soup(1000, 3)).unwrap();
+    let m = scene.memory();
+    let triangles = scene.positions.len();
+    assert_eq!(triangles, 1000);
+    assert!(m.geometry >= 36 * triangles, "{m:?}");
+    assert!(m.bvh > 36 * triangles, "{m:?}");
+    assert_eq!(m.textures, 0);
+    assert!(m.lights >= 4 * triangles, "{m:?}");
+}

@@ -35,6 +35,11 @@ impl PowerLightSampler {
         self.distribution.sample(u)
     }
 
+    /// Bytes of its table.
+    pub fn memory_bytes(&self) -> usize {
+        self.distribution.memory_bytes()
+    }
+
     pub fn pmf(&self, light: usize) -> f32 {
         self.distribution.pmf(light)
     }

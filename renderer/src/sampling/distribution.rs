@@ -11,6 +11,11 @@ pub struct Distribution1D {
 }
 
 impl Distribution1D {
+    /// Bytes of its tables.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(self.cdf.as_slice()) + std::mem::size_of_val(self.pmf.as_slice())
+    }
+
     pub fn new(weights: &[f64]) -> Self {
         let clean: Vec<f64> = weights
             .iter()

@@ -114,6 +114,15 @@ impl Accel {
         ))
     }
 
+    /// Bytes of the BVH's nodes and of the triangles and indices it keeps in its order.
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        self.bvh.as_ref().map_or(0, |b| {
+            size_of_val(b.nodes.as_slice()) + size_of_val(b.primitive_indices.as_slice())
+        }) + size_of_val(self.tris.as_slice())
+            + size_of_val(self.prim_to_triangle.as_slice())
+    }
+
     /// Closest hit in `(0, ray.t_max)`.
     pub fn intersect(&self, ray: &Ray) -> Option<AccelHit> {
         let bvh = self.bvh.as_ref()?;

@@ -186,7 +186,35 @@ pub struct Scene {
 
 pub const NO_LIGHT: u32 = u32::MAX;
 
+/// Bytes a scene holds in memory, by part (the vectors' contents; their few headers and
+/// the materials' names are left out).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SceneMemory {
+    /// Triangle positions, normals, texture coordinates and materials.
+    pub geometry: usize,
+    /// The BVH with its reordered copy of the triangles.
+    pub bvh: usize,
+    pub textures: usize,
+    /// Lights, the light sampler's table and the triangle-to-light map.
+    pub lights: usize,
+}
+
 impl Scene {
+    /// What the scene's parts take in memory.
+    pub fn memory(&self) -> SceneMemory {
+        use std::mem::size_of_val;
+        SceneMemory {
+            geometry: size_of_val(self.positions.as_slice())
+                + size_of_val(self.attributes.as_slice())
+                + size_of_val(self.materials.as_slice()),
+            bvh: self.accel.memory_bytes(),
+            textures: self.textures.iter().map(Texture::texel_bytes).sum(),
+            lights: size_of_val(self.lights.as_slice())
+                + self.light_sampler.memory_bytes()
+                + size_of_val(self.triangle_light.as_slice()),
+        }
+    }
+
     pub fn triangle_material(&self, triangle: u32) -> &Material {
         &self.materials[self.attributes[triangle as usize].material as usize]
     }
