@@ -1,4 +1,4 @@
-//! Ray-tracing and path-tracing throughput on the bundled cornell-glass scene:
+//! Ray-tracing and path-tracing throughput:
 //!
 //! ```text
 //! cargo bench -p caustica-renderer --bench rays
@@ -6,7 +6,9 @@
 //!
 //! Closest-hit and occlusion queries for camera rays (coherent) and for diffuse-bounce rays
 //! (cosine-distributed from the camera rays' hits, incoherent), on one thread and on all
-//! cores; path-tracer, photon-mapping, bidirectional and MMLT throughput. Throughput is
+//! cores, on every bundled scene and on the caustic pool tessellated to a million triangles
+//! (with the time to build its BVH); path-tracer samples per second on every bundled scene;
+//! photon-mapping, bidirectional and MMLT throughput on cornell-glass and door. Throughput is
 //! reported as elements (rays, samples, photons or mutations) per second.
 
 use caustica_renderer::camera::PerspectiveCamera;
@@ -23,12 +25,26 @@ use rayon::prelude::*;
 use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
+use std::time::Duration;
 
 const SIZE: u32 = 256;
 
-fn scene() -> Arc<Scene> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/cornell-glass.gltf");
+/// The bundled scenes, by file stem.
+const BUNDLED: [&str; 4] = ["cornell-box", "cornell-glass", "caustic-pool", "door"];
+
+fn bundled(name: &str) -> Arc<Scene> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../assets/{name}.gltf"));
     Arc::new(load(&path).expect("the bundled scene loads"))
+}
+
+fn scene() -> Arc<Scene> {
+    bundled("cornell-glass")
+}
+
+/// The caustic pool with a rippled surface of a million triangles.
+fn million_triangle_pool() -> Arc<Scene> {
+    let desc = caustica_renderer::procedural::caustic_pool_tessellated(707);
+    Arc::new(Scene::build(desc).expect("the generated scene builds"))
 }
 
 fn camera_rays(scene: &Scene) -> Vec<Ray> {
@@ -76,35 +92,44 @@ fn pools() -> Vec<(usize, rayon::ThreadPool)> {
 }
 
 fn bench_rays(c: &mut Criterion) {
-    let scene = scene();
-    let camera = camera_rays(&scene);
-    let bounce = bounce_rays(&scene, &camera);
-    for (threads, pool) in pools() {
-        for (kind, rays) in [("camera", &camera), ("diffuse-bounce", &bounce)] {
-            let mut group = c.benchmark_group(format!("{kind} rays, {threads} thread(s)"));
-            group.throughput(Throughput::Elements(rays.len() as u64));
-            group.sample_size(20);
-            group.bench_function("closest hit", |b| {
-                b.iter(|| {
-                    pool.install(|| {
-                        rays.par_iter()
-                            .with_min_len(1024)
-                            .filter(|r| scene.intersect(r).is_some())
-                            .count()
+    let mut scenes: Vec<(String, Arc<Scene>)> = BUNDLED
+        .iter()
+        .map(|name| (name.to_string(), bundled(name)))
+        .collect();
+    scenes.push(("pool-1M".into(), million_triangle_pool()));
+    for (name, scene) in &scenes {
+        let camera = camera_rays(scene);
+        let bounce = bounce_rays(scene, &camera);
+        for (threads, pool) in pools() {
+            for (kind, rays) in [("camera", &camera), ("diffuse-bounce", &bounce)] {
+                let mut group =
+                    c.benchmark_group(format!("{name}: {kind} rays, {threads} thread(s)"));
+                group.throughput(Throughput::Elements(rays.len() as u64));
+                group.sample_size(20);
+                group.warm_up_time(Duration::from_secs(1));
+                group.measurement_time(Duration::from_secs(3));
+                group.bench_function("closest hit", |b| {
+                    b.iter(|| {
+                        pool.install(|| {
+                            rays.par_iter()
+                                .with_min_len(1024)
+                                .filter(|r| scene.intersect(r).is_some())
+                                .count()
+                        })
                     })
-                })
-            });
-            group.bench_function("occlusion", |b| {
-                b.iter(|| {
-                    pool.install(|| {
-                        rays.par_iter()
-                            .with_min_len(1024)
-                            .filter(|r| scene.occluded(r))
-                            .count()
+                });
+                group.bench_function("occlusion", |b| {
+                    b.iter(|| {
+                        pool.install(|| {
+                            rays.par_iter()
+                                .with_min_len(1024)
+                                .filter(|r| scene.occluded(r))
+                                .count()
+                        })
                     })
-                })
-            });
-            group.finish();
+                });
+                group.finish();
+            }
         }
     }
 }
@@ -135,24 +160,35 @@ fn bench_passes(
     }
 }
 
-/// Path-tracer samples per second (cornell-glass, 64 x 64, max depth 64).
+/// Path-tracer samples per second on every bundled scene (64 x 64, max depth 64).
 fn bench_path_tracer(c: &mut Criterion) {
-    let scene = scene();
     let size = 64;
-    bench_passes(c, "path tracer samples", (size * size) as u64, || {
-        let ctx = RenderContext {
-            scene: scene.clone(),
-            camera: PerspectiveCamera::new(&scene.camera, size, size),
-            seed: 0,
-        };
-        Box::new(PathTracer::new(ctx, PathSettings::default()))
-    });
+    for name in BUNDLED {
+        let scene = bundled(name);
+        bench_passes(
+            c,
+            &format!("path tracer samples, {name}"),
+            (size * size) as u64,
+            || {
+                let ctx = RenderContext {
+                    scene: scene.clone(),
+                    camera: PerspectiveCamera::new(&scene.camera, size, size),
+                    seed: 0,
+                };
+                Box::new(PathTracer::new(ctx, PathSettings::default()))
+            },
+        );
+    }
 }
 
 fn bench_load(c: &mut Criterion) {
     let mut group = c.benchmark_group("scene");
     group.sample_size(20);
     group.bench_function("load cornell-glass and build its BVH", |b| b.iter(scene));
+    group.sample_size(10);
+    group.bench_function("build the 1 M triangle pool and its BVH", |b| {
+        b.iter(million_triangle_pool)
+    });
     group.finish();
 }
 
@@ -211,10 +247,7 @@ fn bench_bidirectional(c: &mut Criterion) {
     use caustica_renderer::integrators::mmlt::{Mmlt, MmltSettings};
     let size = 64;
     let glass = scene();
-    let door = Arc::new(
-        load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/door.gltf"))
-            .expect("the bundled scene loads"),
-    );
+    let door = bundled("door");
     let ctx = |scene: &Arc<Scene>| RenderContext {
         scene: scene.clone(),
         camera: PerspectiveCamera::new(&scene.camera, size, size),

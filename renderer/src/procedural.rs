@@ -369,6 +369,13 @@ fn rippled_slab(name: &str, half: f32, bottom: f32, top: f32, n: u32, material: 
 /// Light reaching the camera mostly through specular surfaces: a small, bright light above a
 /// slab of rippled glass over a diffuse floor, which the glass covers with caustics.
 pub fn caustic_pool() -> SceneDescription {
+    caustic_pool_tessellated(64)
+}
+
+/// The caustic pool with its rippled surface an `n` x `n` grid (2 n^2 + 2 + 8 n triangles of
+/// glass): `n = 64` is the bundled scene, `n = 707` a million triangles for the ray-casting
+/// benchmarks.
+pub fn caustic_pool_tessellated(n: u32) -> SceneDescription {
     let floor = Material::diffuse(Vec3::new(0.8, 0.78, 0.72)).named("floor");
     let glass = Material::glass(1.5).named("rippled glass");
     let light = Material::emitter(Vec3::new(60.0, 55.0, 45.0), Vec3::ZERO).named("light");
@@ -378,7 +385,7 @@ pub fn caustic_pool() -> SceneDescription {
         name: "caustic-pool".into(),
         meshes: vec![
             horizontal_quad("floor", 0.0, Vec2::splat(-s), Vec2::splat(s), true, 0),
-            rippled_slab("glass", 1.2, 0.35, 0.6, 64, 1),
+            rippled_slab("glass", 1.2, 0.35, 0.6, n, 1),
             horizontal_quad(
                 "light",
                 2.6,
