@@ -50,7 +50,9 @@ pub struct TriangleHit {
     pub b: Vec3,
 }
 
-#[inline]
+/// Always inlined: the BVH calls it through a closure for every candidate, and as a call it
+/// cost 3-7 % of closest-hit throughput (rays bench, 1 thread, the two builds run alternately).
+#[inline(always)]
 pub fn intersect_triangle(
     r: &RayShear,
     t_max: f32,
