@@ -13,6 +13,18 @@ static DECODE: LazyLock<[[f32; 256]; 2]> = LazyLock::new(|| {
     [data.map(srgb_to_linear), data]
 });
 
+/// A texel's linear RGBA; RGB through the sRGB curve when `srgb`.
+fn decode([r, g, b, a]: [u8; 4], srgb: bool) -> Vec4 {
+    let [srgb_table, data] = &*DECODE;
+    let rgb = if srgb { srgb_table } else { data };
+    Vec4::new(
+        rgb[r as usize],
+        rgb[g as usize],
+        rgb[b as usize],
+        data[a as usize],
+    )
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Wrap {
     Repeat,
@@ -59,27 +71,28 @@ impl Texture {
         wrap_s: Wrap,
         wrap_t: Wrap,
     ) -> Texture {
-        let texels = rgba
+        let texels: Vec<[u8; 4]> = rgba
             .chunks_exact(4)
             .map(|c| [c[0], c[1], c[2], c[3]])
             .collect();
-        let mut texture = Texture {
+        // In f64: millions of f32 terms summed in order lose digits.
+        let sum = texels.iter().fold(DVec3::ZERO, |sum, &t| {
+            sum + decode(t, srgb).truncate().as_dvec3()
+        });
+        let mean_rgb = if texels.is_empty() {
+            Vec3::ONE
+        } else {
+            (sum / texels.len() as f64).as_vec3()
+        };
+        Texture {
             width,
             height,
             texels,
             srgb,
-            mean_rgb: Vec3::ONE,
+            mean_rgb,
             wrap_s,
             wrap_t,
-        };
-        if !texture.texels.is_empty() {
-            // In f64: millions of f32 terms summed in order lose digits.
-            let sum = texture.texels.iter().fold(DVec3::ZERO, |sum, &t| {
-                sum + texture.decode(t).truncate().as_dvec3()
-            });
-            texture.mean_rgb = (sum / texture.texels.len() as f64).as_vec3();
         }
-        texture
     }
 
     /// Bytes the texels take.
@@ -87,21 +100,11 @@ impl Texture {
         self.texels.len() * std::mem::size_of::<[u8; 4]>()
     }
 
-    fn decode(&self, [r, g, b, a]: [u8; 4]) -> Vec4 {
-        let [srgb, data] = &*DECODE;
-        let rgb = if self.srgb { srgb } else { data };
-        Vec4::new(
-            rgb[r as usize],
-            rgb[g as usize],
-            rgb[b as usize],
-            data[a as usize],
-        )
-    }
-
     fn texel(&self, x: i64, y: i64) -> Vec4 {
-        self.decode(
+        decode(
             self.texels[wrap_index(y, self.height, self.wrap_t) * self.width
                 + wrap_index(x, self.width, self.wrap_s)],
+            self.srgb,
         )
     }
 
