@@ -15,11 +15,10 @@
 //! rays aimed at the vertices of a closed sphere escaped without the padding.
 
 use crate::geometry::Ray;
-use crate::scene::triangle::{RayShear, TriangleHit, intersect_triangle};
+use crate::scene::traversal::{self, Isa};
+use crate::scene::triangle::RayShear;
 use glam::{Vec3, Vec3A};
-use obvhs::{
-    Boundable, BvhBuildParams, aabb::Aabb, cwbvh::CwBvh, cwbvh::builder::build_cwbvh, ray::RayHit,
-};
+use obvhs::{Boundable, BvhBuildParams, aabb::Aabb, cwbvh::CwBvh, cwbvh::builder::build_cwbvh};
 use std::time::Duration;
 
 /// Extent the scene is scaled to inside the BVH.
@@ -43,6 +42,7 @@ pub struct Accel {
     /// Scene triangle index of each BVH primitive (spatial splits may repeat a triangle).
     prim_to_triangle: Vec<u32>,
     scale: f32,
+    isa: Isa,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -74,6 +74,7 @@ impl Accel {
                 tris: Vec::new(),
                 prim_to_triangle: Vec::new(),
                 scale,
+                isa: Isa::detect(),
             };
         }
         let scaled: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.map(|p| p * scale)).collect();
@@ -99,6 +100,7 @@ impl Accel {
             tris,
             prim_to_triangle,
             scale,
+            isa: Isa::detect(),
         }
     }
 
@@ -128,20 +130,7 @@ impl Accel {
         let bvh = self.bvh.as_ref()?;
         let bvh_ray = self.to_bvh_ray(ray)?;
         let shear = RayShear::new(Vec3::from(bvh_ray.origin), ray.d);
-        let mut best: Option<(u32, TriangleHit)> = None;
-        let mut hit = RayHit::none();
-        bvh.ray_traverse(bvh_ray, &mut hit, |r, id| {
-            let [p0, p1, p2] = self.tris[id];
-            match intersect_triangle(&shear, r.tmax, p0, p1, p2) {
-                Some(h) => {
-                    best = Some((id as u32, h));
-                    h.t
-                }
-                None => f32::INFINITY,
-            }
-        });
-        let (id, h) = best?;
-        // `best` holds the last accepted candidate, which traversal guarantees is the nearest.
+        let (id, h) = traversal::closest_hit(self.isa, bvh, &self.tris, bvh_ray, &shear)?;
         Some(AccelHit {
             t: h.t / self.scale,
             triangle: self.prim_to_triangle[id as usize],
@@ -155,9 +144,59 @@ impl Accel {
             return false;
         };
         let shear = RayShear::new(Vec3::from(bvh_ray.origin), ray.d);
-        !bvh.ray_traverse_miss(bvh_ray, |r, id| {
-            let [p0, p1, p2] = self.tris[id];
-            intersect_triangle(&shear, r.tmax, p0, p1, p2).map_or(f32::INFINITY, |h| h.t)
-        })
+        traversal::any_hit(self.isa, bvh, &self.tris, bvh_ray, &shear)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::sampler::Sampler;
+    use crate::sampling::warp::sample_uniform_sphere;
+
+    /// The traversal compiled for AVX2 and the baseline one find the same hits, bit for bit
+    /// (on a CPU without AVX2 both calls take the baseline path).
+    #[test]
+    fn every_instruction_set_finds_the_same_hits() {
+        let mut s = Sampler::new(7);
+        let point = |s: &mut Sampler| Vec3::new(s.get_1d(), s.get_1d(), s.get_1d());
+        let tris: Vec<[Vec3; 3]> = (0..3000)
+            .map(|i| {
+                s.start_pixel_sample(i, 0);
+                let c = point(&mut s) * 10.0 - 5.0;
+                [0, 1, 2].map(|_| c + (point(&mut s) - 0.5) * 1.5)
+            })
+            .collect();
+        let mut accel = Accel::build(&tris, 6.0);
+        let rays: Vec<Ray> = (0..20_000)
+            .map(|i| {
+                s.start_pixel_sample(i, 1);
+                let o = (point(&mut s) - 0.5) * 14.0;
+                let mut ray = Ray::new(o, sample_uniform_sphere(s.get_2d()));
+                if i % 4 == 0 {
+                    ray.t_max = 2.0;
+                }
+                ray
+            })
+            .collect();
+        let trace = |accel: &Accel| -> Vec<_> {
+            rays.iter()
+                .map(|r| {
+                    let hit = accel
+                        .intersect(r)
+                        .map(|h| (h.t.to_bits(), h.triangle, h.b.to_array().map(f32::to_bits)));
+                    (hit, accel.occluded(r))
+                })
+                .collect()
+        };
+        let detected = trace(&accel);
+        accel.isa = Isa::Baseline;
+        let baseline = trace(&accel);
+        let hits = baseline.iter().filter(|(h, _)| h.is_some()).count();
+        assert!(
+            hits > 5_000 && hits < 19_000,
+            "{hits} hits: the test should see hits and misses"
+        );
+        assert!(detected == baseline);
     }
 }

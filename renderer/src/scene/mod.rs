@@ -6,6 +6,7 @@ pub mod accel;
 mod build;
 pub mod gltf;
 pub mod gltf_export;
+mod traversal;
 pub mod triangle;
 
 use crate::camera::CameraDesc;
