@@ -273,6 +273,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
             "estimated_bias_relmse": estimate.map(|e| e.bias_rel_mse),
             "integrator_statistics": *frame.statistics,
             "scene_memory_bytes": scene.memory(),
+            "integrator_memory_bytes": frame.integrator_memory_bytes,
         });
         let text = serde_json::to_string_pretty(&stats).unwrap_or_default();
         std::fs::write(path, text + "\n")

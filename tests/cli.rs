@@ -229,7 +229,7 @@ fn mmlt_on_the_door_writes_its_technique_histogram() {
 
 /// `--until-error` stops once the estimated relMSE falls below its value (here within a 30 s
 /// cap that a working stop never reaches), and the estimate goes to the header and --stats
-/// (which also reports the scene's memory).
+/// (which also reports the scene's and the integrator's memory).
 #[test]
 fn render_until_an_estimated_error_and_record_it() {
     let dir = temp_dir("until");
@@ -243,7 +243,7 @@ fn render_until_an_estimated_error_and_record_it() {
         ),
     );
     assert!(stderr(&o).contains("is below 2e-2"), "{}", stderr(&o));
-    let (_, meta) = read_exr(&out).unwrap();
+    let (image, meta) = read_exr(&out).unwrap();
     let estimated: f64 = meta["estimated_relmse"].parse().unwrap();
     assert!(estimated < 0.02, "{estimated}");
     assert!(meta["elapsed_seconds"].parse::<f64>().unwrap() < 30.0);
@@ -257,6 +257,13 @@ fn render_until_an_estimated_error_and_record_it() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
     assert_eq!(json["estimated_relmse"].as_f64(), Some(estimated));
+    // The path tracer's memory: a film of three double sums per pixel and a pass buffer of
+    // single-precision RGB.
+    let pixels = (image.width * image.height) as u64;
+    assert_eq!(
+        json["integrator_memory_bytes"].as_u64(),
+        Some(pixels * (3 * 24 + 12))
+    );
     // The scene's memory by part: triangles and BVH but no texels.
     let memory = &json["scene_memory_bytes"];
     assert!(memory["geometry"].as_u64() > Some(0), "{memory}");

@@ -24,6 +24,14 @@ pub struct Film {
 }
 
 impl Film {
+    /// Bytes of the accumulators.
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        size_of_val(self.sum.as_slice())
+            + size_of_val(self.sum_sq.as_slice())
+            + size_of_val(self.odd_sum.as_slice())
+    }
+
     pub fn new(width: usize, height: usize) -> Film {
         Film {
             width,

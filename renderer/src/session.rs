@@ -96,6 +96,8 @@ pub struct Frame {
     pub statistics: Arc<Option<serde_json::Value>>,
     /// The values the integrator chose for parameters left automatic (`Integrator::automatic`).
     pub automatic: Arc<Vec<(&'static str, f64)>>,
+    /// Bytes of the integrator's own buffers (`Integrator::memory_bytes`).
+    pub integrator_memory_bytes: usize,
     /// The image's remaining error estimated without a reference (None until the integrator
     /// has enough samples to estimate it). Renewed after every pass where that costs little,
     /// else as often as it costs a tenth of the time, and at least whenever the passes have
@@ -200,6 +202,7 @@ impl Session {
                 messages: Arc::new(Vec::new()),
                 statistics: Arc::new(None),
                 automatic: Arc::new(Vec::new()),
+                integrator_memory_bytes: 0,
                 error: Arc::new(None),
                 passes: 0,
                 samples: 0,
@@ -327,6 +330,7 @@ struct Estimate {
     messages: Arc<Vec<String>>,
     statistics: Arc<Option<serde_json::Value>>,
     automatic: Arc<Vec<(&'static str, f64)>>,
+    memory_bytes: usize,
     error: Arc<Option<ErrorEstimate>>,
 }
 
@@ -349,6 +353,7 @@ impl Estimate {
             messages: Arc::new(integrator.messages()),
             statistics: Arc::new(integrator.statistics()),
             automatic: Arc::new(integrator.automatic()),
+            memory_bytes: integrator.memory_bytes(),
             error: error.unwrap_or_else(|| Arc::new(integrator.error_estimate())),
         }
     }
@@ -458,6 +463,7 @@ fn run(
             messages: estimate.messages.clone(),
             statistics: estimate.statistics.clone(),
             automatic: estimate.automatic.clone(),
+            integrator_memory_bytes: estimate.memory_bytes,
             error: estimate.error.clone(),
             passes,
             samples: totals.samples,

@@ -251,3 +251,32 @@ fn mmlt_shows_its_bootstrap_before_the_first_pass() {
         "bootstrap image {b}, chains' image {m}"
     );
 }
+
+/// Every integrator counts its own buffers: the path tracer and BDPT exactly their film (sum,
+/// sum of squares and odd passes' sum, in doubles) and one pass's buffer; the others at least
+/// that much per pixel (photon mappers: per-pixel statistics, hit points and grid; MMLT: its
+/// path-traced film and the chains' splat images) and, on 64 x 64 pixels, far below 100 MB.
+#[test]
+fn every_integrator_reports_the_memory_of_its_buffers() {
+    use caustica_renderer::integrators::registry::registry;
+    let pixels = 64 * 64;
+    let film = pixels * 3 * std::mem::size_of::<glam::DVec3>();
+    let pass_buffer = pixels * std::mem::size_of::<glam::Vec3>();
+    for info in registry() {
+        let frame = Session::start(SessionConfig {
+            integrator: info.name.into(),
+            ..config(Some(2))
+        })
+        .unwrap()
+        .wait();
+        let bytes = frame.integrator_memory_bytes;
+        match info.name {
+            "pt" | "bdpt" => assert_eq!(bytes, film + pass_buffer, "{}", info.name),
+            _ => assert!(
+                bytes > film + pass_buffer && bytes < 100 << 20,
+                "{}: {bytes}",
+                info.name
+            ),
+        }
+    }
+}

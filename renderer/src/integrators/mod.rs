@@ -64,6 +64,9 @@ pub struct Cancelled;
 /// give its current estimate at any time.
 pub trait Integrator: Send {
     fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled>;
+    /// Bytes of the integrator's own buffers (films, hit points and their grid, chains),
+    /// counting a pass's temporary buffers at their largest; the scene's are `Scene::memory`.
+    fn memory_bytes(&self) -> usize;
     /// While the integrator prepares before its first pass (MMLT's bootstrap), the share of
     /// the preparation done: `render_pass` then takes one preparation step, which the session
     /// shows (`image` is already an estimate) but does not count as a pass.

@@ -63,6 +63,10 @@ impl<E: PixelEstimator> Integrator for PixelIntegrator<E> {
         Ok(stats)
     }
 
+    fn memory_bytes(&self) -> usize {
+        self.film.memory_bytes() + std::mem::size_of_val(self.pass_buffer.as_slice())
+    }
+
     fn image(&self) -> Image {
         self.film.image()
     }

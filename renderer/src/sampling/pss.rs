@@ -50,6 +50,11 @@ fn wrap(x: f32) -> f32 {
 }
 
 impl PssSampler {
+    /// Bytes of the sampler with its primary samples.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of::<Self>() + std::mem::size_of_val(self.samples.as_slice())
+    }
+
     /// A state whose coordinates will all be drawn fresh, keyed by `key` (a bootstrap
     /// sample's index reproduces that sample).
     pub fn new(seed: u64, key: u64, sigma: f32, large_step_prob: f32) -> Self {

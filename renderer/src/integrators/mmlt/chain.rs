@@ -47,6 +47,13 @@ fn pixel_of(camera: &PerspectiveCamera, raster: Vec2) -> usize {
 }
 
 impl Chain {
+    /// Bytes of the chain with its primary samples and technique choice.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of::<Self>() - std::mem::size_of::<PssSampler>()
+            + self.sampler.memory_bytes()
+            + self.choice.heap_bytes()
+    }
+
     /// A chain started from the bootstrap state `bootstrap_key` of slot `slot`, mutated from
     /// then on by its own `chain_key`; it picks techniques as the bootstrap did.
     #[allow(clippy::too_many_arguments)]

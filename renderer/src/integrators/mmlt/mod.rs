@@ -643,6 +643,53 @@ impl Integrator for Mmlt {
         }
     }
 
+    fn memory_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        let phase = match &self.phase {
+            Phase::Bootstrapping {
+                luminance,
+                per_path_length,
+                splats,
+                ..
+            } => {
+                size_of_val(luminance.as_slice())
+                    + size_of_val(per_path_length.as_slice())
+                    + size_of_val(splats.as_slice())
+            }
+            Phase::Black => 0,
+            Phase::Running {
+                chains,
+                chain_groups,
+                chains_per_length,
+                b_sum,
+                b_sum_sq,
+                b_count,
+                ..
+            } => {
+                chains.iter().map(Chain::memory_bytes).sum::<usize>()
+                    + size_of_val(chain_groups.as_slice())
+                    + chains_per_length
+                        .iter()
+                        .map(|c| size_of_val(c.as_slice()))
+                        .sum::<usize>()
+                    + size_of_val(b_sum.as_slice())
+                    + size_of_val(b_sum_sq.as_slice())
+                    + size_of_val(b_count.as_slice())
+            }
+        };
+        let histogram: usize = (self.histogram.lengths.iter())
+            .map(|l| size_of_val(l) + size_of_val(l.steps_in_technique.as_slice()))
+            .sum();
+        phase
+            + histogram
+            + (self.group_splats.iter())
+                .map(|g| size_of_val(g.as_slice()))
+                .sum::<usize>()
+            + self.direct.memory_bytes()
+            + size_of_val(self.direct_buffer.as_slice())
+            + size_of_val(self.large_step_image.as_slice())
+    }
+
     fn render_pass(&mut self, _pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let started = Instant::now();
         let mut stats = self.direct_pass(cancel)?;

@@ -60,6 +60,11 @@ pub struct Pick {
 }
 
 impl TechniqueChoice {
+    /// Bytes of the path-length distribution (the struct itself apart).
+    pub fn heap_bytes(&self) -> usize {
+        self.lengths.memory_bytes()
+    }
+
     /// Every technique of every length in `lengths` equally likely.
     pub fn uniform(lengths: RangeInclusive<usize>) -> Self {
         let counts: Vec<f64> = lengths.clone().map(|k| technique_count(k) as f64).collect();

@@ -22,6 +22,11 @@ fn hash(c: IVec3) -> usize {
 }
 
 impl HashGrid {
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(self.starts.as_slice())
+            + std::mem::size_of_val(self.entries.as_slice())
+    }
+
     /// Builds the grid over points with radii (`None` entries are skipped).
     pub fn build(points: &[Option<(Vec3, f32)>]) -> HashGrid {
         let live: Vec<(usize, Vec3, f32)> = points

@@ -546,6 +546,20 @@ impl PhotonMapper {
 }
 
 impl Integrator for PhotonMapper {
+    fn memory_bytes(&self) -> usize {
+        use std::mem::{size_of, size_of_val};
+        let n = self.pixels.len();
+        // A pass holds the eye pass's direct light and, during the photon pass, one `Gathered`
+        // per worker plus the merged one.
+        let gathered = n * (size_of::<u32>() + 2 * size_of::<DVec3>());
+        let pass = n * size_of::<DVec3>() + (rayon::current_num_threads() + 1) * gathered;
+        size_of_val(self.pixels.as_slice())
+            + size_of_val(self.hit_points.as_slice())
+            + size_of_val(self.radius_history.as_slice())
+            + self.grid.as_ref().map_or(0, |(g, _)| g.memory_bytes())
+            + pass
+    }
+
     fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let mut stats = PassStats::default();
         let direct = self.eye_pass(pass, cancel, &mut stats)?;
