@@ -6,7 +6,7 @@ use caustica_renderer::light::Light;
 use caustica_renderer::material::{Material, MaterialKind};
 use caustica_renderer::procedural::{cornell_box, quad};
 use caustica_renderer::scene::gltf::load;
-use caustica_renderer::scene::gltf_export::to_gltf;
+use caustica_renderer::scene::gltf_export::{to_glb, to_gltf};
 use caustica_renderer::scene::{PunctualLightDesc, SceneDescription};
 use glam::Vec3;
 use serde_json::{Value, json};
@@ -85,6 +85,8 @@ fn embedded_external_and_binary_containers_load_alike() {
     let embedded = load(&write_json(&dir, "embedded.gltf", &v)).unwrap();
     let (mut j, bin) = split_buffer(v);
     let g = load_glb(&dir, "scene.glb", &j, &bin);
+    // The exporter's .glb is the container this file's own writer makes, byte for byte.
+    assert!(to_glb(&cornell_box(false)) == glb(&j, &bin));
     j["buffers"][0]["uri"] = json!("scene.bin");
     std::fs::write(dir.join("scene.bin"), &bin).unwrap();
     let external = load(&write_json(&dir, "external.gltf", &j)).unwrap();

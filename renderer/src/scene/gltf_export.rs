@@ -49,8 +49,35 @@ fn light_color(c: Vec3) -> (Vec3, f32) {
     }
 }
 
-/// The glTF JSON of `desc`.
+/// The glTF JSON of `desc`, with its buffer embedded as a base64 data URI.
 pub fn to_gltf(desc: &SceneDescription) -> Value {
+    let (mut root, bytes) = gltf_parts(desc);
+    root["buffers"][0]["uri"] = json!(format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bytes)
+    ));
+    root
+}
+
+/// `desc` as a binary glTF (.glb): the JSON chunk, then the buffer as the BIN chunk, which is
+/// how large models are shipped (no base64 to decode on load).
+pub fn to_glb(desc: &SceneDescription) -> Vec<u8> {
+    let (root, bytes) = gltf_parts(desc);
+    let glb = gltf::binary::Glb {
+        // `to_vec` writes the real length.
+        header: gltf::binary::Header {
+            magic: *b"glTF",
+            version: 2,
+            length: 0,
+        },
+        json: serde_json::to_vec(&root).unwrap_or_default().into(),
+        bin: Some(bytes.into()),
+    };
+    glb.to_vec().expect("writing to memory does not fail")
+}
+
+/// The glTF JSON of `desc` whose buffer 0 has no URI (as in a .glb), and that buffer's bytes.
+fn gltf_parts(desc: &SceneDescription) -> (Value, Vec<u8>) {
     let mut buf = BufferWriter {
         bytes: Vec::new(),
         views: Vec::new(),
@@ -181,10 +208,6 @@ pub fn to_gltf(desc: &SceneDescription) -> Value {
         let (_, rotation, translation) = c.camera_to_world.to_scale_rotation_translation();
         nodes.push(json!({"name": "camera", "camera": 0, "translation": translation.to_array(), "rotation": rotation.to_array()}));
     }
-    let uri = format!(
-        "data:application/octet-stream;base64,{}",
-        base64::engine::general_purpose::STANDARD.encode(&buf.bytes)
-    );
     let mut root = json!({
         "asset": {"version": "2.0", "generator": "Caustica (renderer/examples/make_assets.rs)"},
         "scene": 0,
@@ -194,7 +217,7 @@ pub fn to_gltf(desc: &SceneDescription) -> Value {
         "materials": materials,
         "accessors": buf.accessors,
         "bufferViews": buf.views,
-        "buffers": [{"byteLength": buf.bytes.len(), "uri": uri}],
+        "buffers": [{"byteLength": buf.bytes.len()}],
     });
     if !cameras.is_empty() {
         root["cameras"] = json!(cameras);
@@ -206,7 +229,7 @@ pub fn to_gltf(desc: &SceneDescription) -> Value {
     if !extensions_used.is_empty() {
         root["extensionsUsed"] = json!(extensions_used);
     }
-    root
+    (root, buf.bytes)
 }
 
 /// The glTF file text, pretty-printed so diffs of regenerated assets stay readable.
