@@ -184,7 +184,11 @@ fn bench_path_tracer(c: &mut Criterion) {
 fn bench_load(c: &mut Criterion) {
     let mut group = c.benchmark_group("scene");
     group.sample_size(20);
-    group.bench_function("load cornell-glass and build its BVH", |b| b.iter(scene));
+    for name in BUNDLED {
+        group.bench_function(format!("load {name} and build its BVH"), |b| {
+            b.iter(|| bundled(name))
+        });
+    }
     group.sample_size(10);
     group.bench_function("build the 1 M triangle pool and its BVH", |b| {
         b.iter(million_triangle_pool)
