@@ -172,7 +172,15 @@ mod tests {
             .map(|i| {
                 s.start_pixel_sample(i, 1);
                 let o = (point(&mut s) - 0.5) * 14.0;
-                let mut ray = Ray::new(o, sample_uniform_sphere(s.get_2d()));
+                let mut d = sample_uniform_sphere(s.get_2d());
+                // Directions with zero components: infinite inverse directions, and NaN where
+                // they meet a zero plane offset in the node test.
+                match i % 9 {
+                    0 => d = Vec3::AXES[(i / 9 % 3) as usize] * d.x.signum(),
+                    1 => d = (d * Vec3::new(1.0, 0.0, 1.0)).normalize(),
+                    _ => {}
+                }
+                let mut ray = Ray::new(o, d);
                 if i % 4 == 0 {
                     ray.t_max = 2.0;
                 }
