@@ -130,7 +130,7 @@ impl Accel {
         let bvh = self.bvh.as_ref()?;
         let bvh_ray = self.to_bvh_ray(ray)?;
         let shear = RayShear::new(Vec3::from(bvh_ray.origin), ray.d);
-        let (id, h) = traversal::closest_hit(self.isa, bvh, &self.tris, bvh_ray, &shear)?;
+        let (id, h) = traversal::walk::<false>(self.isa, bvh, &self.tris, bvh_ray, &shear)?;
         Some(AccelHit {
             t: h.t / self.scale,
             triangle: self.prim_to_triangle[id as usize],
@@ -144,7 +144,7 @@ impl Accel {
             return false;
         };
         let shear = RayShear::new(Vec3::from(bvh_ray.origin), ray.d);
-        traversal::any_hit(self.isa, bvh, &self.tris, bvh_ray, &shear)
+        traversal::walk::<true>(self.isa, bvh, &self.tris, bvh_ray, &shear).is_some()
     }
 }
 

@@ -49,8 +49,9 @@ impl Isa {
     }
 }
 
-/// Nearest triangle hit in `(0, ray.tmax)`: the BVH primitive index and the hit.
-pub fn closest_hit(
+/// The BVH primitive index and the hit of a triangle in `(0, ray.tmax)`: the nearest, or with
+/// `ANY_HIT` the first found (for shadow rays, which only ask whether there is one).
+pub fn walk<const ANY_HIT: bool>(
     isa: Isa,
     bvh: &CwBvh,
     tris: &[[Vec3; 3]],
@@ -58,41 +59,23 @@ pub fn closest_hit(
     shear: &RayShear,
 ) -> Option<(u32, TriangleHit)> {
     match isa {
-        Isa::Baseline => closest_hit_kernel(bvh, tris, ray, shear, CwBvhNode::intersect_ray),
+        Isa::Baseline => walk_kernel::<ANY_HIT>(bvh, tris, ray, shear, CwBvhNode::intersect_ray),
         // SAFETY: `Isa::Avx2` is only produced by `Isa::detect` when the CPU has every feature
         // the function is compiled for.
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => unsafe { closest_hit_avx2(bvh, tris, ray, shear) },
-    }
-}
-
-/// True if any triangle blocks the ray in `(0, ray.tmax)`.
-pub fn any_hit(isa: Isa, bvh: &CwBvh, tris: &[[Vec3; 3]], ray: Ray, shear: &RayShear) -> bool {
-    match isa {
-        Isa::Baseline => any_hit_kernel(bvh, tris, ray, shear, CwBvhNode::intersect_ray),
-        // SAFETY: as in `closest_hit`.
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => unsafe { any_hit_avx2(bvh, tris, ray, shear) },
+        Isa::Avx2 => unsafe { walk_avx2::<ANY_HIT>(bvh, tris, ray, shear) },
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn closest_hit_avx2(
+fn walk_avx2<const ANY_HIT: bool>(
     bvh: &CwBvh,
     tris: &[[Vec3; 3]],
     ray: Ray,
     shear: &RayShear,
 ) -> Option<(u32, TriangleHit)> {
-    closest_hit_kernel(bvh, tris, ray, shear, |node, ray, oct| {
-        intersect_node_avx2(node, ray, oct)
-    })
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn any_hit_avx2(bvh: &CwBvh, tris: &[[Vec3; 3]], ray: Ray, shear: &RayShear) -> bool {
-    any_hit_kernel(bvh, tris, ray, shear, |node, ray, oct| {
+    walk_kernel::<ANY_HIT>(bvh, tris, ray, shear, |node, ray, oct| {
         intersect_node_avx2(node, ray, oct)
     })
 }
@@ -166,7 +149,7 @@ const NODE_ENTRY_EPSILON: f32 = 0.0001;
 
 /// Always inlined, so that it takes the target features of the function it is expanded into.
 #[inline(always)]
-fn closest_hit_kernel(
+fn walk_kernel<const ANY_HIT: bool>(
     bvh: &CwBvh,
     tris: &[[Vec3; 3]],
     mut ray: Ray,
@@ -176,35 +159,6 @@ fn closest_hit_kernel(
     let mut best = None;
     let mut state = bvh.new_traversal(ray.direction);
     let mut node;
-    obvhs::traverse!(
-        bvh,
-        node,
-        state,
-        intersect_node(node, &ray, state.oct_inv4),
-        {
-            let [p0, p1, p2] = tris[state.primitive_id as usize];
-            // A hit is only reported inside (0, tmax), and tmax then shrinks to it, so the
-            // last hit kept is the nearest.
-            if let Some(h) = intersect_triangle(shear, ray.tmax, p0, p1, p2) {
-                best = Some((state.primitive_id, h));
-                ray.tmax = h.t;
-            }
-        }
-    );
-    best
-}
-
-#[inline(always)]
-fn any_hit_kernel(
-    bvh: &CwBvh,
-    tris: &[[Vec3; 3]],
-    ray: Ray,
-    shear: &RayShear,
-    intersect_node: impl Fn(&CwBvhNode, &Ray, u32) -> u32,
-) -> bool {
-    let mut state = bvh.new_traversal(ray.direction);
-    let mut node;
-    let mut hit = false;
     'walk: {
         obvhs::traverse!(
             bvh,
@@ -213,12 +167,17 @@ fn any_hit_kernel(
             intersect_node(node, &ray, state.oct_inv4),
             {
                 let [p0, p1, p2] = tris[state.primitive_id as usize];
-                if intersect_triangle(shear, ray.tmax, p0, p1, p2).is_some() {
-                    hit = true;
-                    break 'walk;
+                // A hit is only reported inside (0, tmax), and tmax then shrinks to it, so the
+                // last hit kept is the nearest.
+                if let Some(h) = intersect_triangle(shear, ray.tmax, p0, p1, p2) {
+                    best = Some((state.primitive_id, h));
+                    if ANY_HIT {
+                        break 'walk;
+                    }
+                    ray.tmax = h.t;
                 }
             }
         );
     }
-    hit
+    best
 }
