@@ -191,6 +191,9 @@ pub struct PhotonMapper {
     /// The grid over the hit points, and the mean radius it was built for.
     grid: Option<(HashGrid, f64)>,
     grid_builds: u64,
+    /// Workers of the last photon pass (the threads of the pool it ran on), each of which
+    /// gathered into its own buffer.
+    photon_workers: usize,
 }
 
 fn create(ctx: RenderContext, variant: Variant, p: &ParamValues) -> Box<dyn Integrator> {
@@ -257,6 +260,7 @@ impl PhotonMapper {
             history_stride: 1,
             grid: None,
             grid_builds: 0,
+            photon_workers: 0,
             ctx,
         }
     }
@@ -413,7 +417,7 @@ impl PhotonMapper {
             return Ok(Gathered::new(n));
         };
         let photons = self.settings.photons;
-        let chunks = rayon::current_num_threads().max(1) as u64;
+        let chunks = self.photon_workers.max(1) as u64;
         let results: Vec<(Gathered, PassStats)> = (0..chunks)
             .into_par_iter()
             .map(|c| {
@@ -550,9 +554,9 @@ impl Integrator for PhotonMapper {
         use std::mem::{size_of, size_of_val};
         let n = self.pixels.len();
         // A pass holds the eye pass's direct light and, during the photon pass, one `Gathered`
-        // per worker plus the merged one.
+        // per worker plus the merged one (none before the first pass).
         let gathered = n * (size_of::<u32>() + 2 * size_of::<DVec3>());
-        let pass = n * size_of::<DVec3>() + (rayon::current_num_threads() + 1) * gathered;
+        let pass = n * size_of::<DVec3>() + (self.photon_workers + 1) * gathered;
         size_of_val(self.pixels.as_slice())
             + size_of_val(self.hit_points.as_slice())
             + size_of_val(self.radius_history.as_slice())
@@ -564,6 +568,7 @@ impl Integrator for PhotonMapper {
         let mut stats = PassStats::default();
         let direct = self.eye_pass(pass, cancel, &mut stats)?;
         self.update_grid(pass);
+        self.photon_workers = rayon::current_num_threads();
         let gathered = self.photon_pass(pass, cancel, &mut stats)?;
         let alpha = self.settings.alpha;
         let photons = self.settings.photons;
