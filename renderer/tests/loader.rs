@@ -5,7 +5,7 @@
 use caustica_renderer::light::Light;
 use caustica_renderer::material::{Material, MaterialKind};
 use caustica_renderer::procedural::{cornell_box, quad};
-use caustica_renderer::scene::gltf::load;
+use caustica_renderer::scene::gltf::{load, load_description};
 use caustica_renderer::scene::gltf_export::{to_glb, to_gltf};
 use caustica_renderer::scene::{PunctualLightDesc, SceneDescription};
 use glam::Vec3;
@@ -456,5 +456,190 @@ fn non_triangle_primitives_are_skipped_with_a_warning_naming_the_mesh() {
         scene.info.warnings
     );
     assert_eq!(scene.info.triangles, 2 * 5 + 12 * 2);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Each mesh's triangles as the bits of their vertices' positions, each triangle rotated to
+/// start at its smallest vertex (rotation keeps the winding) and the mesh's list sorted.
+fn triangle_sets(desc: &SceneDescription) -> Vec<Vec<[[u32; 3]; 3]>> {
+    desc.meshes
+        .iter()
+        .map(|m| {
+            let mut tris: Vec<[[u32; 3]; 3]> = m
+                .indices
+                .chunks_exact(3)
+                .map(|t| {
+                    let p = [t[0], t[1], t[2]]
+                        .map(|i| m.positions[i as usize].to_array().map(f32::to_bits));
+                    (0..3)
+                        .map(|r| [p[r], p[(r + 1) % 3], p[(r + 2) % 3]])
+                        .min()
+                        .unwrap()
+                })
+                .collect();
+            tris.sort();
+            tris
+        })
+        .collect()
+}
+
+#[test]
+fn strips_and_fans_load_as_the_triangles_they_list() {
+    let dir = temp_dir("strips");
+    let desc = cornell_box(false);
+    let listed =
+        triangle_sets(&load_description(&write_json(&dir, "list.gltf", &to_gltf(&desc))).unwrap());
+    // Meshes 0-5 are quads (0 1 2, 0 2 3): the strip 1 2 0 3 and the fan 0 1 2 3 list the
+    // same two triangles with the same winding.
+    for (mode, order) in [(5, [1, 2, 0, 3]), (6, [0, 1, 2, 3])] {
+        let mut d = desc.clone();
+        for m in &mut d.meshes[..6] {
+            assert_eq!(m.indices, [0, 1, 2, 0, 2, 3]);
+            m.indices = order.to_vec();
+        }
+        let mut v = to_gltf(&d);
+        for i in 0..6 {
+            v["meshes"][i]["primitives"][0]["mode"] = json!(mode);
+        }
+        let path = write_json(&dir, &format!("mode-{mode}.gltf"), &v);
+        let loaded = load_description(&path).unwrap();
+        assert_eq!(triangle_sets(&loaded), listed, "mode {mode}");
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Appends `bytes` to the exported file as a new buffer (data URI) with one view; its index.
+fn push_buffer_view(v: &mut Value, bytes: &[u8]) -> usize {
+    use base64::Engine;
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(bytes)
+    );
+    let buffers = v["buffers"].as_array_mut().unwrap();
+    buffers.push(json!({"uri": uri, "byteLength": bytes.len()}));
+    let buffer = buffers.len() - 1;
+    let views = v["bufferViews"].as_array_mut().unwrap();
+    views.push(json!({"buffer": buffer, "byteLength": bytes.len()}));
+    views.len() - 1
+}
+
+#[test]
+fn sparse_accessors_load_as_the_dense_arrays_they_stand_for() {
+    let dir = temp_dir("sparse");
+    let desc = cornell_box(false);
+    // The dense truth: the floor's vertices 1 and 3 raised.
+    let mut moved = desc.clone();
+    let lift = Vec3::new(0.0, 0.25, 0.0);
+    moved.meshes[0].positions[1] += lift;
+    moved.meshes[0].positions[3] += lift;
+    let dense = to_gltf(&moved);
+    let truth = load_description(&write_json(&dir, "dense.gltf", &dense)).unwrap();
+    let floats = |ps: &[Vec3]| -> Vec<u8> {
+        ps.iter()
+            .flat_map(|p| p.to_array())
+            .flat_map(f32::to_le_bytes)
+            .collect()
+    };
+    let position = |v: &Value| {
+        v["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+            .as_u64()
+            .unwrap() as usize
+    };
+
+    // Over the unmoved positions: indices 1 and 3 (u16) replaced.
+    let mut v = to_gltf(&desc);
+    let a = position(&v);
+    let indices = push_buffer_view(&mut v, &[1, 0, 3, 0]);
+    let values = push_buffer_view(
+        &mut v,
+        &floats(&[moved.meshes[0].positions[1], moved.meshes[0].positions[3]]),
+    );
+    v["accessors"][a]["sparse"] = json!({"count": 2,
+        "indices": {"bufferView": indices, "componentType": 5123},
+        "values": {"bufferView": values}});
+    v["accessors"][a]["min"] = dense["accessors"][a]["min"].clone();
+    v["accessors"][a]["max"] = dense["accessors"][a]["max"].clone();
+    let over_base = load_description(&write_json(&dir, "sparse.gltf", &v)).unwrap();
+    assert_eq!(triangle_sets(&over_base), triangle_sets(&truth));
+
+    // Without a buffer view the base is zeros: every vertex given sparsely (u8 indices).
+    let mut w = v.clone();
+    w["accessors"][a]
+        .as_object_mut()
+        .unwrap()
+        .remove("bufferView");
+    let all = push_buffer_view(&mut w, &[0, 1, 2, 3]);
+    let values = push_buffer_view(&mut w, &floats(&moved.meshes[0].positions));
+    w["accessors"][a]["sparse"] = json!({"count": 4,
+        "indices": {"bufferView": all, "componentType": 5121},
+        "values": {"bufferView": values}});
+    let from_zeros = load_description(&write_json(&dir, "sparse-no-base.gltf", &w)).unwrap();
+    assert_eq!(triangle_sets(&from_zeros), triangle_sets(&truth));
+
+    // Indices out of order, or values past their view: refused with the JSON path.
+    let mut bad = v.clone();
+    let backwards = push_buffer_view(&mut bad, &[3, 0, 1, 0]);
+    bad["accessors"][a]["sparse"]["indices"]["bufferView"] = json!(backwards);
+    expect_error(
+        &write_json(&dir, "sparse-unsorted.gltf", &bad),
+        &format!("accessors[{a}].sparse.indices: index 1"),
+    );
+    let mut bad = v.clone();
+    bad["accessors"][a]["sparse"]["count"] = json!(3);
+    let three = push_buffer_view(&mut bad, &[0, 0, 1, 0, 3, 0]);
+    bad["accessors"][a]["sparse"]["indices"]["bufferView"] = json!(three);
+    expect_error(
+        &write_json(&dir, "sparse-short-values.gltf", &bad),
+        &format!("accessors[{a}].sparse.values: 3 values of 12 bytes run past"),
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn scenes_without_nodes_and_files_without_scenes() {
+    let dir = temp_dir("no-nodes");
+    let good = to_gltf(&cornell_box(false));
+    // `scene.nodes` is optional in glTF 2.0: an empty scene is read, and has nothing to show.
+    let mut v = good.clone();
+    v["scenes"][0].as_object_mut().unwrap().remove("nodes");
+    expect_error(
+        &write_json(&dir, "empty-scene.gltf", &v),
+        "no triangle meshes",
+    );
+    // No scenes at all: every root node is shown, with a warning saying so.
+    let mut v = good.clone();
+    v.as_object_mut().unwrap().remove("scenes");
+    v.as_object_mut().unwrap().remove("scene");
+    let scene = load(&write_json(&dir, "no-scenes.gltf", &v)).unwrap();
+    let all = load(&write_json(&dir, "good.gltf", &good)).unwrap();
+    assert_eq!(scene.info.triangles, all.info.triangles);
+    assert!(scene.info.warnings.iter().any(|w| w.contains("no scenes")));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn errors_are_one_short_line_with_the_json_path_and_the_buffer_named() {
+    let dir = temp_dir("messages");
+    let good = to_gltf(&cornell_box(false));
+    let (j, _) = split_buffer(good.clone());
+    let mut v = j.clone();
+    v["buffers"][0]["uri"] = json!("missing.bin");
+    let path = write_json(&dir, "missing-buffer.gltf", &v);
+    expect_error(&path, "buffers[0] (missing.bin): cannot load");
+
+    let mut v = good.clone();
+    for mesh in 0..3 {
+        v["meshes"][mesh]["primitives"][0]["material"] = json!(99);
+    }
+    let path = write_json(&dir, "bad-material-index.gltf", &v);
+    expect_error(&path, "invalid glTF: meshes[0].primitives[0].material");
+    expect_error(&path, "(and 2 more problems)");
+    for path in [path, dir.join("missing-buffer.gltf")] {
+        let msg = load(&path).err().unwrap().to_string();
+        let problem = msg.replace(&path.display().to_string(), "");
+        assert!(!msg.contains('\n') && problem.len() < 200, "{msg}");
+        assert!(msg.matches("invalid glTF").count() <= 1, "{msg}");
+    }
     std::fs::remove_dir_all(dir).unwrap();
 }

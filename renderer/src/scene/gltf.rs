@@ -47,20 +47,16 @@ fn err(problem: impl Into<String>) -> SceneError {
 
 fn read(path: &Path) -> Result<SceneDescription, SceneError> {
     let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read file: {e}")))?;
-    let gltf = gltf::Gltf::from_slice_without_validation(&bytes)
-        .map_err(|e| err(format!("not a valid glTF file: {e}")))?;
-    for ext in gltf.document.extensions_required() {
-        if !SUPPORTED_EXTENSIONS.contains(&ext) {
+    let (root, blob) = parse(&bytes)?;
+    for ext in &root.extensions_required {
+        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
             return Err(err(format!("requires the unsupported extension {ext}")));
         }
     }
     // Validate after the extension check, so an unknown required extension is named as such.
-    let gltf::Gltf { document, blob } = gltf;
-    let document = gltf::Document::from_json(document.into_json())
-        .map_err(|e| err(format!("invalid glTF: {e}")))?;
+    let document = gltf::Document::from_json(root).map_err(validation_error)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let buffers = gltf::import_buffers(&document, Some(base), blob)
-        .map_err(|e| err(format!("cannot load buffers: {e}")))?;
+    let buffers = load_buffers(&document, base, blob)?;
     check_views_and_accessors(&document, &buffers)?;
 
     let mut loader = Loader {
@@ -86,12 +82,94 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
                 loader.visit(&node, Mat4::IDENTITY, 0)?;
             }
         }
-        None => return Err(err("the file has no scene")),
+        // The spec leaves a file without scenes to the application; like Blender's importer
+        // we show every root node (one that is no node's child) rather than nothing.
+        None => {
+            loader
+                .desc
+                .warnings
+                .push("the file has no scenes: showing every root node".into());
+            let children: std::collections::HashSet<usize> = document
+                .nodes()
+                .flat_map(|n| n.children().map(|c| c.index()))
+                .collect();
+            for node in document.nodes().filter(|n| !children.contains(&n.index())) {
+                loader.visit(&node, Mat4::IDENTITY, 0)?;
+            }
+        }
     }
     if loader.desc.meshes.is_empty() {
         return Err(err("the scene has no triangle meshes"));
     }
     Ok(loader.desc)
+}
+
+/// The JSON document and the binary chunk of a `.gltf` or `.glb` file. A scene without a
+/// `nodes` array is valid glTF (the property is optional) but the gltf crate requires it, so
+/// the JSON is read as a value first and the empty array supplied.
+fn parse(bytes: &[u8]) -> Result<(gltf::json::Root, Option<Vec<u8>>), SceneError> {
+    let invalid = |e: &dyn std::fmt::Display| err(format!("not a valid glTF file: {e}"));
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        let glb = gltf::Glb::from_slice(bytes).map_err(|e| invalid(&e))?;
+        (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
+    } else {
+        (bytes.to_vec(), None)
+    };
+    let mut value: serde_json::Value = serde_json::from_slice(&json).map_err(|e| invalid(&e))?;
+    if let Some(scenes) = value.get_mut("scenes").and_then(|s| s.as_array_mut()) {
+        for scene in scenes.iter_mut().filter_map(|s| s.as_object_mut()) {
+            scene
+                .entry("nodes")
+                .or_insert_with(|| serde_json::json!([]));
+        }
+    }
+    let root = serde_json::from_value(value).map_err(|e| invalid(&e))?;
+    Ok((root, blob))
+}
+
+/// The first problem the validator found, with its JSON path, and how many more there are
+/// (the gltf crate's own message lists them all on one line).
+fn validation_error(e: gltf::Error) -> SceneError {
+    let gltf::Error::Validation(problems) = e else {
+        return err(format!("invalid glTF: {e}"));
+    };
+    let Some((path, problem)) = problems.first() else {
+        return err("invalid glTF");
+    };
+    let more = match problems.len() - 1 {
+        0 => String::new(),
+        1 => " (and 1 more problem)".into(),
+        n => format!(" (and {n} more problems)"),
+    };
+    err(format!("invalid glTF: {path}: {problem}{more}"))
+}
+
+/// Every buffer's bytes; a buffer that cannot be read is named by index and URI.
+fn load_buffers(
+    document: &gltf::Document,
+    base: &Path,
+    mut blob: Option<Vec<u8>>,
+) -> Result<Vec<gltf::buffer::Data>, SceneError> {
+    let mut buffers = Vec::new();
+    for buffer in document.buffers() {
+        let name = match buffer.source() {
+            gltf::buffer::Source::Uri(uri) if !uri.starts_with("data:") => format!(" ({uri})"),
+            gltf::buffer::Source::Uri(_) => " (data URI)".into(),
+            gltf::buffer::Source::Bin => " (the GLB binary chunk)".into(),
+        };
+        let index = buffer.index();
+        let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), Some(base), &mut blob)
+            .map_err(|e| err(format!("buffers[{index}]{name}: cannot load: {e}")))?;
+        if data.len() < buffer.length() {
+            return Err(err(format!(
+                "buffers[{index}]{name}: holds {} bytes, the file says {}",
+                data.len(),
+                buffer.length()
+            )));
+        }
+        buffers.push(data);
+    }
+    Ok(buffers)
 }
 
 /// Bounds of every buffer view and accessor, so no read can go past its buffer.
@@ -112,11 +190,8 @@ fn check_views_and_accessors(
         }
     }
     for acc in document.accessors() {
-        if acc.sparse().is_some() {
-            return Err(err(format!(
-                "accessor {}: sparse accessors are not supported",
-                acc.index()
-            )));
+        if let Some(sparse) = acc.sparse() {
+            check_sparse(&acc, &sparse, buffers)?;
         }
         let Some(view) = acc.view() else { continue };
         let elem = acc.size();
@@ -138,6 +213,63 @@ fn check_views_and_accessors(
                 view.length()
             )));
         }
+    }
+    Ok(())
+}
+
+/// A sparse accessor's index and value arrays fit their views, and its indices rise strictly
+/// and stay below the accessor's count: the gltf crate's reader assumes both (spec 3.6.2.3)
+/// and would drop values silently or panic otherwise.
+fn check_sparse(
+    acc: &gltf::Accessor,
+    sparse: &gltf::accessor::sparse::Sparse,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), SceneError> {
+    let at = |what: &str| format!("accessors[{}].sparse{what}", acc.index());
+    let count = sparse.count();
+    if count == 0 || count > acc.count() {
+        return Err(err(format!(
+            "{}: count {count} is not in 1..={} (the accessor's count)",
+            at(""),
+            acc.count()
+        )));
+    }
+    // Bytes `offset .. offset + count * size` of a view, or None when they run past it.
+    let slice = |view: gltf::buffer::View, offset: usize, size: usize| {
+        let data = &buffers.get(view.buffer().index())?.0;
+        let view_bytes = data.get(view.offset()..view.offset().checked_add(view.length())?)?;
+        view_bytes.get(offset..offset.checked_add(count.checked_mul(size)?)?)
+    };
+    let values = sparse.values();
+    if slice(values.view(), values.offset(), acc.size()).is_none() {
+        return Err(err(format!(
+            "{}: {count} values of {} bytes run past buffer view {}",
+            at(".values"),
+            acc.size(),
+            values.view().index()
+        )));
+    }
+    let indices = sparse.indices();
+    let size = indices.index_type().size();
+    let Some(bytes) = slice(indices.view(), indices.offset(), size) else {
+        return Err(err(format!(
+            "{}: {count} indices of {size} bytes run past buffer view {}",
+            at(".indices"),
+            indices.view().index()
+        )));
+    };
+    let mut previous = None;
+    for chunk in bytes.chunks_exact(size) {
+        let mut le = [0u8; 4];
+        le[..size].copy_from_slice(chunk);
+        let index = u32::from_le_bytes(le) as usize;
+        if index >= acc.count() || previous.is_some_and(|p| index <= p) {
+            return Err(err(format!(
+                "{}: index {index} is out of range or not above the one before it",
+                at(".indices")
+            )));
+        }
+        previous = Some(index);
     }
     Ok(())
 }
@@ -247,10 +379,14 @@ impl Loader<'_> {
         let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
         let flip = world.determinant() < 0.0;
         for prim in mesh.primitives() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
+            use gltf::mesh::Mode;
+            let mode = prim.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
                 self.desc.warnings.push(format!(
-                    "{name}: primitive with mode {:?} skipped (only TRIANGLES)",
-                    prim.mode()
+                    "{name}: primitive with mode {mode:?} skipped (points and lines have no area)"
                 ));
                 continue;
             }
@@ -275,6 +411,11 @@ impl Loader<'_> {
                 Some(i) => i.into_u32().collect(),
                 None => (0..positions.len() as u32).collect(),
             };
+            match mode {
+                Mode::TriangleStrip => indices = strip_to_list(&indices),
+                Mode::TriangleFan => indices = fan_to_list(&indices),
+                _ => {}
+            }
             if indices.len() % 3 != 0 {
                 self.desc.warnings.push(format!(
                     "{name}: {} trailing indices ignored",
@@ -409,6 +550,21 @@ impl Loader<'_> {
         self.texture_index.insert(key, i);
         Some(TextureRef { texture: i })
     }
+}
+
+/// Triangle i of a strip is (v_i, v_{i+1+i%2}, v_{i+2-i%2}), glTF 2.0 section 3.7.2.1:
+/// every other triangle swaps its last two vertices so that all keep the strip's winding.
+fn strip_to_list(strip: &[u32]) -> Vec<u32> {
+    (0..strip.len().saturating_sub(2))
+        .flat_map(|i| [strip[i], strip[i + 1 + i % 2], strip[i + 2 - i % 2]])
+        .collect()
+}
+
+/// Triangle i of a fan is (v_{i+1}, v_{i+2}, v_0), glTF 2.0 section 3.7.2.1.
+fn fan_to_list(fan: &[u32]) -> Vec<u32> {
+    (0..fan.len().saturating_sub(2))
+        .flat_map(|i| [fan[i + 1], fan[i + 2], fan[0]])
+        .collect()
 }
 
 fn to_rgba8(data: &gltf::image::Data) -> Option<(usize, usize, Vec<u8>)> {
