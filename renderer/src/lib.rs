@@ -36,4 +36,5 @@ pub mod sampling;
 pub mod scene;
 pub mod session;
 pub mod texture;
+pub mod texture_footprint;
 pub mod transport;

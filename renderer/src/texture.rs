@@ -47,7 +47,8 @@ pub struct Texture {
     pub wrap_t: Wrap,
 }
 
-fn wrap_index(i: i64, n: usize, wrap: Wrap) -> usize {
+/// The texel index `i` stands for under `wrap`, in `0..n`.
+pub(crate) fn wrap_index(i: i64, n: usize, wrap: Wrap) -> usize {
     let n = n as i64;
     let i = match wrap {
         Wrap::Repeat => i.rem_euclid(n),
@@ -98,6 +99,11 @@ impl Texture {
     /// Bytes the texels take.
     pub fn texel_bytes(&self) -> usize {
         self.texels.len() * std::mem::size_of::<[u8; 4]>()
+    }
+
+    /// Linear RGB of texel (x, y), both inside the image.
+    pub(crate) fn texel_rgb(&self, x: usize, y: usize) -> Vec3 {
+        decode(self.texels[y * self.width + x], self.srgb).truncate()
     }
 
     fn texel(&self, x: i64, y: i64) -> Vec4 {

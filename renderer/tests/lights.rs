@@ -3,10 +3,11 @@
 //! one-sided emission, shadow rays and the MIS weights between strategies. A very narrow camera looks at one point p0 of the
 //! plane, so every pixel estimates the same radiance and their spread gives the tolerance.
 
-use caustica_renderer::material::{Material, TransportMode};
+use caustica_renderer::material::{Material, TextureRef, TransportMode};
 use caustica_renderer::procedural::{camera_looking, quad};
 use caustica_renderer::sampling::sampler::Sampler;
-use caustica_renderer::scene::{PunctualLightDesc, SceneDescription};
+use caustica_renderer::scene::{PunctualLightDesc, Scene, SceneDescription};
+use caustica_renderer::texture::{Texture, Wrap};
 use glam::{Vec2, Vec3};
 use std::f64::consts::PI;
 
@@ -147,6 +148,60 @@ fn square_area_light_on_a_diffuse_plane() {
             "{integrator}: a one-sided emitter lit the side it faces away from"
         );
     }
+}
+
+#[test]
+fn textured_area_light_whose_black_triangles_are_no_lights() {
+    // The square light of the test above, its emission from the white half of a texture that
+    // is black on the other half, beside a second quad of the same material that maps to
+    // the black half: that quad's triangles emit nothing, so they are no lights, and the
+    // plane's radiance is still the square's closed form.
+    let (rho, le, a, h) = (0.7f32, 3.0f32, 0.5f32, 0.8f32);
+    let mut desc = plane_scene(Material::diffuse(Vec3::splat(rho)));
+    let texels: Vec<u8> = (0..64)
+        .flat_map(|i| if i % 8 < 4 { [0, 0, 0, 255] } else { [255; 4] })
+        .collect();
+    desc.textures = vec![Texture::from_rgba8(
+        8,
+        8,
+        &texels,
+        true,
+        Wrap::ClampToEdge,
+        Wrap::ClampToEdge,
+    )];
+    desc.materials.push(Material {
+        emission: Vec3::splat(le),
+        emissive_texture: Some(TextureRef { texture: 0 }),
+        ..Material::diffuse(Vec3::ZERO)
+    });
+    let corners = |x0: f32| {
+        [
+            Vec3::new(x0 - a, h, -a),
+            Vec3::new(x0 + a, h, -a),
+            Vec3::new(x0 + a, h, a),
+            Vec3::new(x0 - a, h, a),
+        ]
+    };
+    // Bilinear lookups read only white texels for u >= 0.5625 and only black ones for
+    // u <= 0.3125.
+    for (x0, (u0, u1)) in [(0.0, (0.7, 0.9)), (2.5, (0.05, 0.3))] {
+        let mut m = quad("light", corners(x0), 1);
+        m.uvs = Some(vec![
+            Vec2::new(u0, 0.1),
+            Vec2::new(u1, 0.1),
+            Vec2::new(u1, 0.9),
+            Vec2::new(u0, 0.9),
+        ]);
+        desc.meshes.push(m);
+    }
+    let scene = Scene::build(desc.clone()).unwrap();
+    assert_eq!(
+        scene.lights.len(),
+        2,
+        "only the white square's two triangles are lights"
+    );
+    let exact = rho as f64 / PI * square_irradiance(le as f64, a as f64, h as f64);
+    assert_close("textured area light", render_mean(desc, 64), exact);
 }
 
 #[test]

@@ -16,7 +16,9 @@ use crate::light::punctual::{DirectionalLight, PointLight, SpotLight};
 use crate::light::sampler::PowerLightSampler;
 use crate::material::Material;
 use crate::texture::Texture;
+use crate::texture_footprint::LuminancePrefix;
 use glam::{Vec2, Vec3};
+use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
 /// The meshes as world-space triangles.
@@ -224,8 +226,10 @@ fn flatten_meshes(meshes: &[MeshDesc], material_count: u32) -> Result<Triangles,
     })
 }
 
-/// An area light for every triangle with an emissive material, and each triangle's light
-/// index (`NO_LIGHT` for the others).
+/// An area light for every triangle with an emissive material, but those whose emissive
+/// texture is black wherever they can look it up (they emit nothing), each with its power
+/// from its own footprint of the texture; and each triangle's light index (`NO_LIGHT` for the
+/// others).
 fn area_lights(
     positions: &[[Vec3; 3]],
     attributes: &[TriangleAttributes],
@@ -234,16 +238,34 @@ fn area_lights(
 ) -> (Vec<Light>, Vec<u32>) {
     let mut lights = Vec::new();
     let mut triangle_light = vec![NO_LIGHT; positions.len()];
+    // Built on first use: only emissive textures need one.
+    let mut prefixes: HashMap<u32, Option<LuminancePrefix>> = HashMap::new();
     for (i, (p, attr)) in positions.iter().zip(attributes).enumerate() {
         let m = &materials[attr.material as usize];
         if !m.is_emissive() {
             continue;
         }
+        let texture = m
+            .emissive_texture
+            .and_then(|t| Some((t.texture, textures.get(t.texture as usize)?)));
+        let mean = match texture {
+            None => m.emission,
+            Some((index, texture)) => {
+                let prefix = prefixes
+                    .entry(index)
+                    .or_insert_with(|| LuminancePrefix::new(texture));
+                match prefix {
+                    // The texture's colour at the footprint's strength: only the power's
+                    // luminance is used, to choose lights.
+                    Some(prefix) => match prefix.footprint_mean(attr.uvs) {
+                        None => continue,
+                        Some(l) => m.emission * texture.mean_rgb() * (l / prefix.mean()),
+                    },
+                    None => m.emission * texture.mean_rgb(),
+                }
+            }
+        };
         let cross = (p[1] - p[0]).cross(p[2] - p[0]);
-        let mean = m.emission
-            * m.emissive_texture
-                .and_then(|t| textures.get(t.texture as usize))
-                .map_or(Vec3::ONE, |t| t.mean_rgb());
         triangle_light[i] = lights.len() as u32;
         lights.push(Light::Area(AreaLight {
             positions: *p,
