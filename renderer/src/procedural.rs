@@ -69,6 +69,7 @@ pub fn uv_sphere(
         positions,
         normals: Some(normals),
         uvs: Some(uvs),
+        uvs1: None,
         indices,
         material,
     }
@@ -86,6 +87,7 @@ pub fn quad(name: &str, p: [Vec3; 4], material: u32) -> MeshDesc {
             Vec2::new(1.0, 0.0),
             Vec2::new(0.0, 0.0),
         ]),
+        uvs1: None,
         indices: vec![0, 1, 2, 0, 2, 3],
         material,
     }

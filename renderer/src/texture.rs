@@ -25,6 +25,10 @@ fn decode([r, g, b, a]: [u8; 4], srgb: bool) -> Vec4 {
     )
 }
 
+/// A point's texture coordinates in the sets TEXCOORD_0 and TEXCOORD_1 (the first repeated
+/// where a mesh has no second set).
+pub type TexCoords = [Vec2; 2];
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Wrap {
     Repeat,

@@ -171,7 +171,7 @@ fn textured_area_light_whose_black_triangles_are_no_lights() {
     )];
     desc.materials.push(Material {
         emission: Vec3::splat(le),
-        emissive_texture: Some(TextureRef { texture: 0 }),
+        emissive_texture: Some(TextureRef::new(0)),
         ..Material::diffuse(Vec3::ZERO)
     });
     let corners = |x0: f32| {
@@ -220,7 +220,7 @@ fn uniform_environment_on_diffuse_and_glossy_planes() {
         roughness: 0.3,
         ..Default::default()
     };
-    let bsdf = glossy.bsdf(&[], Vec2::ZERO);
+    let bsdf = glossy.bsdf(&[], &[Vec2::ZERO; 2]);
     // Local frame of the plane: normal +y maps to +z; only the angle to the normal matters.
     let to_eye = EYE.normalize();
     let wo = Vec3::new((1.0 - to_eye.y * to_eye.y).sqrt(), 0.0, to_eye.y);

@@ -643,3 +643,143 @@ fn errors_are_one_short_line_with_the_json_path_and_the_buffer_named() {
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// The base colour a ray straight down at (x, z) finds on a diffuse floor.
+fn base_colour_at(scene: &caustica_renderer::scene::Scene, x: f32, z: f32) -> Vec3 {
+    use caustica_renderer::geometry::Ray;
+    use caustica_renderer::material::Bsdf;
+    let si = scene
+        .intersect(&Ray::new(Vec3::new(x, 1.0, z), Vec3::NEG_Y))
+        .unwrap();
+    match scene.bsdf(&si) {
+        Bsdf::Diffuse(d) => d.r,
+        other => panic!("expected the diffuse floor, got {other:?}"),
+    }
+}
+
+#[test]
+fn texture_transforms_and_second_coordinates_read_as_pretransformed_coordinates() {
+    let dir = temp_dir("texture-transform");
+    // A 4 x 4 texture of distinct colours, repeated.
+    let texels = image::RgbImage::from_fn(4, 4, |x, y| {
+        image::Rgb([
+            (x * 60 + 20) as u8,
+            (y * 60 + 20) as u8,
+            ((x + y) * 25 + 10) as u8,
+        ])
+    });
+    texels.save(dir.join("grid.png")).unwrap();
+    let floor = quad(
+        "floor",
+        [
+            Vec3::new(-1., 0., 1.),
+            Vec3::new(1., 0., 1.),
+            Vec3::new(1., 0., -1.),
+            Vec3::new(-1., 0., -1.),
+        ],
+        0,
+    );
+    let uvs = floor.uvs.clone().unwrap();
+    let textured = |mesh: caustica_renderer::scene::MeshDesc, info: Value| {
+        let desc = SceneDescription {
+            meshes: vec![mesh],
+            materials: vec![Material::diffuse(Vec3::ONE)],
+            ..Default::default()
+        };
+        let mut v = to_gltf(&desc);
+        v["images"] = json!([{"uri": "grid.png"}]);
+        v["samplers"] = json!([{"wrapS": 10497, "wrapT": 10497}]);
+        v["textures"] = json!([{"source": 0, "sampler": 0}]);
+        v["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = info;
+        v
+    };
+    // KHR_texture_transform's GLSL, written out: uv' = offset + R(rotation) (scale * uv),
+    // R = mat3(cos, -sin, 0, sin, cos, 0, 0, 0, 1), column by column.
+    let (offset, rotation, scale) = (
+        glam::Vec2::new(0.3, -0.2),
+        0.7f32,
+        glam::Vec2::new(1.7, 0.6),
+    );
+    let transformed: Vec<glam::Vec2> = uvs
+        .iter()
+        .map(|&uv| {
+            let s = uv * scale;
+            let (sin, cos) = rotation.sin_cos();
+            offset + glam::Vec2::new(cos * s.x + sin * s.y, -sin * s.x + cos * s.y)
+        })
+        .collect();
+    let mut pretransformed = floor.clone();
+    pretransformed.uvs = Some(transformed.clone());
+    let reference = textured(pretransformed, json!({"index": 0}));
+    let mut with_transform = textured(
+        floor.clone(),
+        json!({"index": 0, "extensions": {"KHR_texture_transform": {
+            "offset": offset.to_array(), "rotation": rotation, "scale": scale.to_array()}}}),
+    );
+    with_transform["extensionsUsed"] = json!(["KHR_texture_transform"]);
+    with_transform["extensionsRequired"] = json!(["KHR_texture_transform"]);
+    // TEXCOORD_1 holds the coordinates; TEXCOORD_0 something else.
+    let mut second_set = floor.clone();
+    second_set.uvs = Some(uvs.iter().map(|uv| glam::Vec2::ONE - *uv).collect());
+    second_set.uvs1 = Some(transformed);
+    let second_set = textured(second_set, json!({"index": 0, "texCoord": 1}));
+
+    let load_in = |name: &str, v: &Value| load(&write_json(&dir, name, v)).unwrap();
+    let reference = load_in("reference.gltf", &reference);
+    let others = [
+        load_in("transform.gltf", &with_transform),
+        load_in("texcoord1.gltf", &second_set),
+    ];
+    let mut distinct = std::collections::HashSet::new();
+    for i in 0..400 {
+        let (x, z) = ((i % 20) as f32 / 10.0 - 0.95, (i / 20) as f32 / 10.0 - 0.95);
+        let expected = base_colour_at(&reference, x, z);
+        distinct.insert(expected.to_array().map(f32::to_bits));
+        for (name, scene) in ["transform", "texcoord 1"].iter().zip(&others) {
+            let got = base_colour_at(scene, x, z);
+            assert!(
+                (got - expected).abs().max_element() < 1e-4,
+                "{name} at ({x}, {z}): {got} against {expected}"
+            );
+        }
+    }
+    // The comparison means something only if the texture varies over the floor.
+    assert!(distinct.len() > 100, "{} distinct colours", distinct.len());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn an_unlit_material_emits_its_base_colour_and_reflects_nothing() {
+    use caustica_renderer::geometry::Ray;
+    use caustica_renderer::material::Bsdf;
+    let dir = temp_dir("unlit");
+    let mut v = to_gltf(&cornell_box(false));
+    let colour = [0.2, 0.5, 0.8];
+    v["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = json!([0.2, 0.5, 0.8, 1.0]);
+    v["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = json!(1.0);
+    v["materials"][0]["extensions"] = json!({"KHR_materials_unlit": {}});
+    // Used but not required: read without it, and said so.
+    v["extensionsUsed"] = json!(["KHR_materials_unlit", "KHR_materials_sheen"]);
+    v["extensionsRequired"] = json!(["KHR_materials_unlit"]);
+    let scene = load(&write_json(&dir, "unlit.gltf", &v)).unwrap();
+    for expected in [
+        "asks for an unlit look",
+        "KHR_materials_sheen, which is not read",
+    ] {
+        assert!(
+            scene.info.warnings.iter().any(|w| w.contains(expected)),
+            "{:?}",
+            scene.info.warnings
+        );
+    }
+    // The floor (material 0) seen from above.
+    let floor = scene
+        .intersect(&Ray::new(Vec3::new(0.5, 1.0, 0.5), Vec3::NEG_Y))
+        .unwrap();
+    assert_eq!(scene.emitted(&floor, Vec3::Y), Vec3::from(colour));
+    match scene.bsdf(&floor) {
+        Bsdf::Diffuse(d) => assert_eq!(d.r, Vec3::ZERO),
+        other => panic!("expected a black diffuse surface, got {other:?}"),
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -103,7 +103,7 @@ pub fn li(
             break;
         };
         if let Some((light, area)) = scene.area_light(&si) {
-            let le = area.l(&scene.textures, si.uv, si.wo);
+            let le = area.l(&scene.textures, &si.uv, si.wo);
             if le != Vec3::ZERO {
                 let w = if depth == 0 || specular_bounce {
                     1.0

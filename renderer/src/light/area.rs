@@ -7,7 +7,7 @@ use crate::geometry::{interpolate2, interpolate3};
 use crate::light::{LightLiSample, LightSampleContext};
 use crate::material::TextureRef;
 use crate::sampling::warp::sample_uniform_triangle;
-use crate::texture::Texture;
+use crate::texture::{TexCoords, Texture};
 use glam::{Vec2, Vec3};
 
 /// The light of one emissive triangle: its geometry and its material's emission, copied out
@@ -15,7 +15,8 @@ use glam::{Vec2, Vec3};
 #[derive(Clone, Debug)]
 pub struct AreaLight {
     pub positions: [Vec3; 3],
-    pub uvs: [Vec2; 3],
+    /// TEXCOORD_0 and TEXCOORD_1 at the corners.
+    pub uvs: [[Vec2; 3]; 2],
     /// The material's emitted radiance, scaled by `emissive_texture` where there is one.
     pub emission: Vec3,
     pub emissive_texture: Option<TextureRef>,
@@ -28,20 +29,21 @@ pub struct AreaLight {
 }
 
 impl AreaLight {
-    /// Radiance leaving point `uv` of the light in direction `w`.
-    pub fn l(&self, textures: &[Texture], uv: Vec2, w: Vec3) -> Vec3 {
+    /// Radiance leaving the point with texture coordinates `uv` in direction `w`.
+    pub fn l(&self, textures: &[Texture], uv: &TexCoords, w: Vec3) -> Vec3 {
         if !self.two_sided && self.normal.dot(w) <= 0.0 {
             return Vec3::ZERO;
         }
         let texture = self
             .emissive_texture
-            .and_then(|t| textures.get(t.texture as usize));
-        self.emission * texture.map_or(Vec3::ONE, |t| t.lookup(uv).truncate())
+            .and_then(|t| Some((textures.get(t.texture as usize)?, t.uv(uv))));
+        self.emission * texture.map_or(Vec3::ONE, |(t, uv)| t.lookup(uv).truncate())
     }
 
-    /// The point and texture coordinate at barycentric coordinates `b`.
-    pub fn point(&self, b: Vec3) -> (Vec3, Vec2) {
-        (interpolate3(&self.positions, b), interpolate2(&self.uvs, b))
+    /// The point and texture coordinates at barycentric coordinates `b`.
+    pub fn point(&self, b: Vec3) -> (Vec3, TexCoords) {
+        let uv = self.uvs.map(|set| interpolate2(&set, b));
+        (interpolate3(&self.positions, b), uv)
     }
 
     pub fn sample_li(
@@ -64,7 +66,7 @@ impl AreaLight {
             return None;
         }
         let pdf = dist2 / (cos_light * self.area);
-        let l = self.l(textures, uv, -wi);
+        let l = self.l(textures, &uv, -wi);
         if l == Vec3::ZERO || !pdf.is_finite() {
             return None;
         }

@@ -14,10 +14,10 @@ pub mod mirror;
 #[cfg(test)]
 mod tests;
 
-use crate::texture::Texture;
+use crate::texture::{TexCoords, Texture};
 use dielectric::DielectricBsdf;
 use diffuse::DiffuseBsdf;
-use glam::{Vec2, Vec3};
+use glam::{Affine2, Vec2, Vec3};
 use metallic_roughness::MetallicRoughnessBsdf;
 use microfacet::TrowbridgeReitz;
 use mirror::MirrorBsdf;
@@ -106,10 +106,30 @@ impl Bsdf {
     }
 }
 
-/// A texture reference: index into the scene's textures (TEXCOORD_0 only).
+/// A texture reference: index into the scene's textures, the TEXCOORD set it reads (0 or 1)
+/// and the affine map KHR_texture_transform applies to that set's coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TextureRef {
     pub texture: u32,
+    pub tex_coord: u32,
+    pub transform: Affine2,
+}
+
+impl TextureRef {
+    /// Texture `texture` read at TEXCOORD_0 as it stands.
+    pub fn new(texture: u32) -> TextureRef {
+        TextureRef {
+            texture,
+            tex_coord: 0,
+            transform: Affine2::IDENTITY,
+        }
+    }
+
+    /// Where this reference looks its texture up at a point with coordinates `uv`.
+    pub fn uv(&self, uv: &TexCoords) -> Vec2 {
+        let set = uv[(self.tex_coord as usize).min(1)];
+        self.transform.transform_point2(set)
+    }
 }
 
 /// Which BSDF a material needs, decided once from its factors (DESIGN.md section 2).
@@ -222,17 +242,29 @@ impl Material {
         }
     }
 
+    /// Every texture the material reads.
+    pub fn texture_refs(&self) -> impl Iterator<Item = TextureRef> {
+        [
+            self.base_color_texture,
+            self.metallic_roughness_texture,
+            self.emissive_texture,
+            self.normal_texture.map(|(r, _)| r),
+        ]
+        .into_iter()
+        .flatten()
+    }
+
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
     }
 
-    fn texture_rgba(textures: &[Texture], t: Option<TextureRef>, uv: Vec2) -> glam::Vec4 {
-        t.and_then(|t| textures.get(t.texture as usize))
-            .map_or(glam::Vec4::ONE, |tex| tex.lookup(uv))
+    fn texture_rgba(textures: &[Texture], t: Option<TextureRef>, uv: &TexCoords) -> glam::Vec4 {
+        t.and_then(|t| Some((textures.get(t.texture as usize)?, t.uv(uv))))
+            .map_or(glam::Vec4::ONE, |(tex, uv)| tex.lookup(uv))
     }
 
-    /// The BSDF at a point with texture coordinate `uv`.
-    pub fn bsdf(&self, textures: &[Texture], uv: Vec2) -> Bsdf {
+    /// The BSDF at a point with texture coordinates `uv`.
+    pub fn bsdf(&self, textures: &[Texture], uv: &TexCoords) -> Bsdf {
         let base = (self.base_color
             * Self::texture_rgba(textures, self.base_color_texture, uv).truncate())
         .clamp(Vec3::ZERO, Vec3::ONE);

@@ -25,6 +25,8 @@ use std::time::{Duration, Instant};
 struct Triangles {
     positions: Vec<[Vec3; 3]>,
     attributes: Vec<TriangleAttributes>,
+    /// TEXCOORD_1 of every triangle, or nothing when no mesh has it.
+    uvs1: Vec<[Vec2; 3]>,
     bounds: Bounds3,
     /// Degenerate (zero-area) triangles dropped.
     dropped: usize,
@@ -56,13 +58,14 @@ impl Scene {
         let Triangles {
             positions,
             attributes,
+            uvs1,
             bounds,
             dropped,
         } = triangles;
         let (_, scene_radius) = bounds.bounding_sphere();
 
         let (mut lights, triangle_light) =
-            area_lights(&positions, &attributes, &materials, &textures);
+            area_lights(&positions, &attributes, &uvs1, &materials, &textures);
         lights.extend(punctual.iter().map(|l| punctual_light(l, scene_radius)));
         let default_environment = lights.is_empty();
         let mut environment = None;
@@ -103,6 +106,7 @@ impl Scene {
         Ok(Scene {
             positions,
             attributes,
+            uvs1,
             materials,
             textures,
             lights,
@@ -154,6 +158,9 @@ fn validate_mesh(mesh: &MeshDesc) -> Result<(), SceneError> {
     if let Some(uvs) = &mesh.uvs {
         check_len(uvs.len(), "texture coordinates")?;
     }
+    if let Some(uvs) = &mesh.uvs1 {
+        check_len(uvs.len(), "second texture coordinates")?;
+    }
     Ok(())
 }
 
@@ -163,6 +170,8 @@ fn flatten_meshes(meshes: &[MeshDesc], material_count: u32) -> Result<Triangles,
     let default_material = material_count - 1;
     let mut positions = Vec::new();
     let mut attributes = Vec::new();
+    let second_set = meshes.iter().any(|m| m.uvs1.is_some());
+    let mut uvs1 = Vec::new();
     let mut dropped = 0usize;
     let mut bounds = Bounds3::EMPTY;
     for mesh in meshes {
@@ -191,15 +200,14 @@ fn flatten_meshes(meshes: &[MeshDesc], material_count: u32) -> Result<Triangles,
                 .as_ref()
                 .map(|ns| idx.map(|i| ns[i].normalize_or_zero()))
                 .filter(|ns| ns.iter().all(|n| n.is_finite() && *n != Vec3::ZERO));
-            let uvs = mesh
-                .uvs
-                .as_ref()
-                .map_or([Vec2::ZERO; 3], |uv| idx.map(|i| uv[i]));
-            let uvs = if uvs.iter().all(|u| u.is_finite()) {
-                uvs
-            } else {
-                [Vec2::ZERO; 3]
+            let corners = |set: Option<&Vec<Vec2>>| {
+                let uvs = set.map(|uv| idx.map(|i| uv[i]));
+                uvs.filter(|uvs| uvs.iter().all(|u| u.is_finite()))
             };
+            let uvs = corners(mesh.uvs.as_ref()).unwrap_or([Vec2::ZERO; 3]);
+            if second_set {
+                uvs1.push(corners(mesh.uvs1.as_ref()).unwrap_or(uvs));
+            }
             for q in p {
                 bounds = bounds.union_point(q);
             }
@@ -221,6 +229,7 @@ fn flatten_meshes(meshes: &[MeshDesc], material_count: u32) -> Result<Triangles,
     Ok(Triangles {
         positions,
         attributes,
+        uvs1,
         bounds,
         dropped,
     })
@@ -233,6 +242,7 @@ fn flatten_meshes(meshes: &[MeshDesc], material_count: u32) -> Result<Triangles,
 fn area_lights(
     positions: &[[Vec3; 3]],
     attributes: &[TriangleAttributes],
+    uvs1: &[[Vec2; 3]],
     materials: &[Material],
     textures: &[Texture],
 ) -> (Vec<Light>, Vec<u32>) {
@@ -245,19 +255,23 @@ fn area_lights(
         if !m.is_emissive() {
             continue;
         }
+        let uvs = [attr.uvs, uvs1.get(i).copied().unwrap_or(attr.uvs)];
         let texture = m
             .emissive_texture
-            .and_then(|t| Some((t.texture, textures.get(t.texture as usize)?)));
+            .and_then(|t| Some((t, textures.get(t.texture as usize)?)));
         let mean = match texture {
             None => m.emission,
-            Some((index, texture)) => {
+            Some((reference, texture)) => {
+                let index = reference.texture;
+                let footprint = uvs[(reference.tex_coord as usize).min(1)]
+                    .map(|uv| reference.transform.transform_point2(uv));
                 let prefix = prefixes
                     .entry(index)
                     .or_insert_with(|| LuminancePrefix::new(texture));
                 match prefix {
                     // The texture's colour at the footprint's strength: only the power's
                     // luminance is used, to choose lights.
-                    Some(prefix) => match prefix.footprint_mean(attr.uvs) {
+                    Some(prefix) => match prefix.footprint_mean(footprint) {
                         None => continue,
                         Some(l) => m.emission * texture.mean_rgb() * (l / prefix.mean()),
                     },
@@ -269,7 +283,7 @@ fn area_lights(
         triangle_light[i] = lights.len() as u32;
         lights.push(Light::Area(AreaLight {
             positions: *p,
-            uvs: attr.uvs,
+            uvs,
             emission: m.emission,
             emissive_texture: m.emissive_texture,
             area: 0.5 * cross.length(),

@@ -8,7 +8,7 @@ use crate::camera::CameraDesc;
 use crate::material::{Material, TextureRef};
 use crate::scene::{MeshDesc, PunctualLightDesc, Scene, SceneDescription, SceneError};
 use crate::texture::{Texture, Wrap};
-use glam::{Affine3A, Mat3, Mat4, Quat, Vec2, Vec3};
+use glam::{Affine2, Affine3A, Mat3, Mat4, Quat, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 use std::time::Instant;
@@ -19,6 +19,8 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
+    "KHR_texture_transform",
+    "KHR_materials_unlit",
 ];
 
 const MAX_NODE_DEPTH: usize = 256;
@@ -53,6 +55,12 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
             return Err(err(format!("requires the unsupported extension {ext}")));
         }
     }
+    let ignored_extensions: Vec<String> = root
+        .extensions_used
+        .iter()
+        .filter(|ext| !SUPPORTED_EXTENSIONS.contains(&ext.as_str()))
+        .map(|ext| format!("uses the extension {ext}, which is not read (ignored)"))
+        .collect();
     // Validate after the extension check, so an unknown required extension is named as such.
     let document = gltf::Document::from_json(root).map_err(validation_error)?;
     let base = path.parent().unwrap_or(Path::new("."));
@@ -67,6 +75,7 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default(),
+            warnings: ignored_extensions,
             ..Default::default()
         },
         material_index: HashMap::new(),
@@ -429,11 +438,20 @@ impl Loader<'_> {
                 }
             }
             let material = self.material(prim.material())?;
+            // The second set only where a texture reads it (files often carry lightmap
+            // coordinates we have no use for).
+            let uvs1 = self.desc.materials[material as usize]
+                .texture_refs()
+                .any(|r| r.tex_coord == 1)
+                .then(|| reader.read_tex_coords(1))
+                .flatten()
+                .map(|t| t.into_f32().map(Vec2::from).collect::<Vec<_>>());
             self.desc.meshes.push(MeshDesc {
                 name: name.clone(),
                 positions,
                 normals,
                 uvs,
+                uvs1,
                 indices,
                 material,
             });
@@ -477,17 +495,36 @@ impl Loader<'_> {
         }
         material.base_color_texture = pbr
             .base_color_texture()
-            .and_then(|t| self.texture(&t.texture(), t.tex_coord(), true));
+            .and_then(|t| self.texture_info(&t, true));
         material.metallic_roughness_texture = pbr
             .metallic_roughness_texture()
-            .and_then(|t| self.texture(&t.texture(), t.tex_coord(), false));
+            .and_then(|t| self.texture_info(&t, false));
         material.emissive_texture = m
             .emissive_texture()
-            .and_then(|t| self.texture(&t.texture(), t.tex_coord(), true));
+            .and_then(|t| self.texture_info(&t, true));
         material.normal_texture = m.normal_texture().and_then(|t| {
-            self.texture(&t.texture(), t.tex_coord(), false)
+            self.texture(&t.texture(), t.tex_coord(), Affine2::IDENTITY, false)
                 .map(|r| (r, t.scale()))
         });
+        if m.unlit() {
+            // KHR_materials_unlit asks for the base colour as it stands, whatever the light: a
+            // path tracer shows that as a black surface emitting its base colour (which then
+            // also lights what is near it).
+            self.desc.warnings.push(format!(
+                "material '{label}' asks for an unlit look (KHR_materials_unlit): shown as an \
+                 emitter of its base colour"
+            ));
+            material.emission = material.base_color;
+            material.emissive_texture = material.base_color_texture;
+            material.base_color = Vec3::ZERO;
+            material.base_color_texture = None;
+            // Black diffuse: it reflects nothing (a glossy lobe would still mirror 4 %).
+            material.metallic = 0.0;
+            material.roughness = 1.0;
+            material.metallic_roughness_texture = None;
+            material.normal_texture = None;
+            material.transmission = 0.0;
+        }
         let i = self.desc.materials.len() as u32;
         self.desc.materials.push(material);
         self.material_index.insert(m.index(), i);
@@ -514,21 +551,60 @@ impl Loader<'_> {
         decoded
     }
 
+    /// A texture reference with KHR_texture_transform's offset, rotation and scale, applied
+    /// as the ratified extension's GLSL says: uv' = T(offset) R(rotation) S(scale) uv, where R
+    /// has columns (cos, -sin) and (sin, cos): a rotation by -rotation in (u, v), which is
+    /// counter-clockwise on the image since v points down (the Khronos TextureTransformTest
+    /// model's markers confirm the direction). The extension's texCoord overrides the
+    /// reference's.
+    fn texture_info(&mut self, info: &gltf::texture::Info, srgb: bool) -> Option<TextureRef> {
+        let (transform, tex_coord) = match info.texture_transform() {
+            None => (Affine2::IDENTITY, info.tex_coord()),
+            Some(t) => {
+                let transform = Affine2::from_scale_angle_translation(
+                    Vec2::from(t.scale()),
+                    -t.rotation(),
+                    Vec2::from(t.offset()),
+                );
+                let tex_coord = t.tex_coord().unwrap_or(info.tex_coord());
+                if transform.is_finite() {
+                    (transform, tex_coord)
+                } else {
+                    self.desc.warnings.push(format!(
+                        "texture {}: KHR_texture_transform is not finite, ignored",
+                        info.texture().index()
+                    ));
+                    (Affine2::IDENTITY, tex_coord)
+                }
+            }
+        };
+        self.texture(&info.texture(), tex_coord, transform, srgb)
+    }
+
     fn texture(
         &mut self,
         texture: &gltf::Texture,
         tex_coord: u32,
+        transform: Affine2,
         srgb: bool,
     ) -> Option<TextureRef> {
-        if tex_coord != 0 {
+        let tex_coord = if tex_coord > 1 {
             self.desc.warnings.push(format!(
-                "texture {}: only TEXCOORD_0 is supported",
+                "textures[{}]: TEXCOORD_{tex_coord} is not supported (only 0 and 1), read at TEXCOORD_0",
                 texture.index()
             ));
-        }
+            0
+        } else {
+            tex_coord
+        };
+        let reference = |texture| TextureRef {
+            texture,
+            tex_coord,
+            transform,
+        };
         let key = (texture.index(), srgb);
         if let Some(&i) = self.texture_index.get(&key) {
-            return Some(TextureRef { texture: i });
+            return Some(reference(i));
         }
         let (w, h, rgba) = self.image_rgba8(&texture.source())?;
         let wrap = |m: gltf::texture::WrappingMode| match m {
@@ -548,7 +624,7 @@ impl Loader<'_> {
         let i = self.desc.textures.len() as u32;
         self.desc.textures.push(tex);
         self.texture_index.insert(key, i);
-        Some(TextureRef { texture: i })
+        Some(reference(i))
     }
 }
 

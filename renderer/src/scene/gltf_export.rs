@@ -102,6 +102,18 @@ fn gltf_parts(desc: &SceneDescription) -> (Value, Vec<u8>) {
                 json!({"componentType": 5126, "count": uv.len(), "type": "VEC2"})
             ));
         }
+        if let Some(uv) = &mesh.uvs1 {
+            let data: Vec<u8> = uv
+                .iter()
+                .flat_map(|t| t.to_array())
+                .flat_map(f32::to_le_bytes)
+                .collect();
+            attributes["TEXCOORD_1"] = json!(buf.push(
+                &data,
+                34962,
+                json!({"componentType": 5126, "count": uv.len(), "type": "VEC2"})
+            ));
+        }
         let idx: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
         let indices = buf.push(
             &idx,

@@ -15,7 +15,7 @@ use crate::light::area::AreaLight;
 use crate::light::sampler::PowerLightSampler;
 use crate::light::{Light, LightLiSample, LightSampleContext};
 use crate::material::{Bsdf, Material};
-use crate::texture::Texture;
+use crate::texture::{TexCoords, Texture};
 use accel::Accel;
 use glam::{Vec2, Vec3};
 use std::path::PathBuf;
@@ -50,6 +50,8 @@ pub struct MeshDesc {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
     pub uvs: Option<Vec<Vec2>>,
+    /// The second set of texture coordinates (TEXCOORD_1), for textures that ask for it.
+    pub uvs1: Option<Vec<Vec2>>,
     /// Three indices per triangle, counter-clockwise seen from the front.
     pub indices: Vec<u32>,
     pub material: u32,
@@ -117,7 +119,7 @@ pub struct SurfaceInteraction {
     pub t: f32,
     pub n: Vec3,
     pub shading: Frame,
-    pub uv: Vec2,
+    pub uv: TexCoords,
     pub wo: Vec3,
     pub triangle: u32,
 }
@@ -171,6 +173,8 @@ pub const SHADOW_EPSILON: f32 = 1e-4;
 pub struct Scene {
     pub positions: Vec<[Vec3; 3]>,
     pub attributes: Vec<TriangleAttributes>,
+    /// Each triangle's TEXCOORD_1 at its corners; empty when no mesh has a second set.
+    pub uvs1: Vec<[Vec2; 3]>,
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub lights: Vec<Light>,
@@ -207,6 +211,7 @@ impl Scene {
         SceneMemory {
             geometry: size_of_val(self.positions.as_slice())
                 + size_of_val(self.attributes.as_slice())
+                + size_of_val(self.uvs1.as_slice())
                 + size_of_val(self.materials.as_slice()),
             bvh: self.accel.memory_bytes(),
             textures: self.textures.iter().map(Texture::texel_bytes).sum(),
@@ -220,13 +225,19 @@ impl Scene {
         &self.materials[self.attributes[triangle as usize].material as usize]
     }
 
-    /// Point and texture coordinate at barycentrics `b` of a triangle.
-    pub fn triangle_point(&self, triangle: u32, b: Vec3) -> (Vec3, Vec2) {
+    /// Point and texture coordinates at barycentrics `b` of a triangle.
+    pub fn triangle_point(&self, triangle: u32, b: Vec3) -> (Vec3, TexCoords) {
         let t = triangle as usize;
-        (
-            interpolate3(&self.positions[t], b),
-            interpolate2(&self.attributes[t].uvs, b),
-        )
+        (interpolate3(&self.positions[t], b), self.tex_coords(t, b))
+    }
+
+    /// Both sets of texture coordinates at barycentrics `b` of triangle `t`.
+    fn tex_coords(&self, t: usize, b: Vec3) -> TexCoords {
+        let uv0 = interpolate2(&self.attributes[t].uvs, b);
+        [
+            uv0,
+            self.uvs1.get(t).map_or(uv0, |uvs| interpolate2(uvs, b)),
+        ]
     }
 
     /// Closest surface hit along the ray.
@@ -237,7 +248,7 @@ impl Scene {
         let attr = &self.attributes[t];
         let (point, p_error) = triangle::hit_point_and_error(p, hit.b);
         let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
-        let uv = interpolate2(&attr.uvs, hit.b);
+        let uv = self.tex_coords(t, hit.b);
         let mut ns = attr
             .normals
             .map_or(n, |ns| interpolate3(&ns, hit.b).normalize_or(n));
@@ -247,12 +258,17 @@ impl Scene {
         let material = &self.materials[attr.material as usize];
         let shading = match material
             .normal_texture
-            .and_then(|(t, s)| self.textures.get(t.texture as usize).map(|tex| (tex, s)))
+            .and_then(|(r, s)| self.textures.get(r.texture as usize).map(|tex| (r, tex, s)))
         {
-            Some((tex, scale)) => {
-                let frame =
-                    Frame::from_normal_tangent(ns, dpdu(p, &attr.uvs).unwrap_or(Vec3::ZERO));
-                let c = tex.lookup(uv);
+            Some((r, tex, scale)) => {
+                // The tangent follows the coordinates the normal map is read at.
+                let corners = match (r.tex_coord, self.uvs1.get(t)) {
+                    (1, Some(uvs1)) => uvs1,
+                    _ => &attr.uvs,
+                };
+                let corners = corners.map(|c| r.transform.transform_point2(c));
+                let frame = Frame::from_normal_tangent(ns, dpdu(p, &corners).unwrap_or(Vec3::ZERO));
+                let c = tex.lookup(r.uv(&uv));
                 let local = Vec3::new(
                     (2.0 * c.x - 1.0) * scale,
                     (2.0 * c.y - 1.0) * scale,
@@ -282,7 +298,7 @@ impl Scene {
 
     pub fn bsdf(&self, si: &SurfaceInteraction) -> Bsdf {
         self.triangle_material(si.triangle)
-            .bsdf(&self.textures, si.uv)
+            .bsdf(&self.textures, &si.uv)
     }
 
     /// Light index of the hit triangle, if it emits.
@@ -319,7 +335,7 @@ impl Scene {
     /// Radiance emitted by the surface at `si` towards `w`.
     pub fn emitted(&self, si: &SurfaceInteraction, w: Vec3) -> Vec3 {
         self.area_light(si)
-            .map_or(Vec3::ZERO, |(_, a)| a.l(&self.textures, si.uv, w))
+            .map_or(Vec3::ZERO, |(_, a)| a.l(&self.textures, &si.uv, w))
     }
 
     /// Radiance arriving along a ray that left the scene.

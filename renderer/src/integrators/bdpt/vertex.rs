@@ -268,7 +268,7 @@ impl Vertex {
             return scene.environment_radiance();
         }
         match (self.emitter(scene), &self.si) {
-            (Some((_, Light::Area(a))), Some(si)) => a.l(&scene.textures, si.uv, w),
+            (Some((_, Light::Area(a))), Some(si)) => a.l(&scene.textures, &si.uv, w),
             _ => Vec3::ZERO,
         }
     }
