@@ -200,3 +200,141 @@ fn scene_memory_counts_each_part() {
     assert_eq!(m.textures, 0);
     assert!(m.lights >= 4 * triangles, "{m:?}");
 }
+
+/// A floor, and above it a unit quad over [0, 1] x [0, 1] at height 1 whose material is
+/// `cover`; texture 0 (if the material reads it) has an opaque left texel and a transparent
+/// right one, so bilinear alpha falls from 1 to 0 across u in [0.25, 0.75] and crosses 0.5 at
+/// u = 0.5.
+fn covered_floor(cover: caustica_renderer::material::Material, quad_u: (f32, f32)) -> Scene {
+    use caustica_renderer::material::Material;
+    use caustica_renderer::procedural::quad;
+    use caustica_renderer::texture::{Texture, Wrap};
+    let v = Vec3::new;
+    let (u0, u1) = quad_u;
+    let mut top = quad(
+        "cover",
+        [v(u0, 1., 1.), v(u1, 1., 1.), v(u1, 1., 0.), v(u0, 1., 0.)],
+        1,
+    );
+    top.uvs = Some(vec![
+        Vec2::new(u0, 1.),
+        Vec2::new(u1, 1.),
+        Vec2::new(u1, 0.),
+        Vec2::new(u0, 0.),
+    ]);
+    let floor = quad(
+        "floor",
+        [
+            v(-2., 0., 2.),
+            v(3., 0., 2.),
+            v(3., 0., -2.),
+            v(-2., 0., -2.),
+        ],
+        0,
+    );
+    let texels = [255, 255, 255, 255, 255, 255, 255, 0];
+    Scene::build(SceneDescription {
+        meshes: vec![floor, top],
+        materials: vec![Material::diffuse(Vec3::ONE), cover],
+        textures: vec![Texture::from_rgba8(
+            2,
+            1,
+            &texels,
+            true,
+            Wrap::ClampToEdge,
+            Wrap::ClampToEdge,
+        )],
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// Rays from above the cover towards the floor, in random directions.
+fn downward_rays(n: usize) -> Vec<Ray> {
+    let mut s = Sampler::new(41);
+    (0..n)
+        .map(|i| {
+            s.start_pixel_sample(i as u64, 0);
+            let o = Vec3::new(s.get_1d() * 2.0 - 0.5, 2.0, s.get_1d() * 2.0 - 0.5);
+            let target = Vec3::new(s.get_1d() * 2.0 - 0.5, 0.0, s.get_1d() * 2.0 - 0.5);
+            Ray::new(o, (target - o).normalize())
+        })
+        .collect()
+}
+
+#[test]
+fn a_mask_cut_out_traces_like_the_geometry_with_the_hole_cut() {
+    use caustica_renderer::material::{AlphaMode, Material, TextureRef};
+    let masked = Material {
+        base_color_texture: Some(TextureRef::new(0)),
+        alpha_mode: AlphaMode::Mask(0.5),
+        ..Material::diffuse(Vec3::ONE)
+    };
+    let cut_out = covered_floor(masked, (0.0, 1.0));
+    // The hole cut: only the half u < 0.5 of the quad, opaque.
+    let cut = covered_floor(Material::diffuse(Vec3::ONE), (0.0, 0.5));
+    let (mut through, mut stopped) = (0, 0);
+    for ray in downward_rays(20_000) {
+        // Where the ray crosses the cover's plane; rays within rounding of the cut line are
+        // left out (alpha is exactly 0.5 there).
+        let at = ray.o + ray.d * ((1.0 - ray.o.y) / ray.d.y);
+        if (at.x - 0.5).abs() < 1e-4 {
+            continue;
+        }
+        let (a, b) = (cut_out.intersect(&ray), cut.intersect(&ray));
+        let (ta, tb) = (a.map(|h| h.t), b.map(|h| h.t));
+        assert!(
+            ta.zip(tb).is_some_and(|(x, y)| (x - y).abs() <= 1e-5 * y),
+            "{ray:?}: {ta:?} against {tb:?}"
+        );
+        let mut shadow = ray;
+        shadow.t_max = tb.unwrap() * 0.999;
+        assert_eq!(cut_out.occluded(&shadow), cut.occluded(&shadow), "{ray:?}");
+        if tb.unwrap() < 1.5 / ray.d.y.abs() - 0.1 {
+            stopped += 1;
+        } else {
+            through += 1;
+        }
+    }
+    assert!(
+        through > 1000 && stopped > 1000,
+        "{through} through, {stopped} stopped"
+    );
+}
+
+#[test]
+fn a_blended_surface_stops_the_share_of_rays_its_alpha_says() {
+    use caustica_renderer::material::{AlphaMode, Material};
+    let alpha = 0.3;
+    let blended = Material {
+        alpha,
+        alpha_mode: AlphaMode::Blend,
+        ..Material::diffuse(Vec3::ONE)
+    };
+    let scene = covered_floor(blended, (0.0, 1.0));
+    let (mut crossing, mut stopped) = (0u32, 0u32);
+    for ray in downward_rays(40_000) {
+        let at = ray.o + ray.d * ((1.0 - ray.o.y) / ray.d.y);
+        if !(0.0..1.0).contains(&at.x) || !(0.0..1.0).contains(&at.z) {
+            continue;
+        }
+        crossing += 1;
+        let hit = scene.intersect(&ray).unwrap();
+        let on_cover = hit.p.y > 0.5;
+        stopped += on_cover as u32;
+        // The same ray always finds the same answer, and a shadow ray agrees with it.
+        assert_eq!(scene.intersect(&ray).unwrap().t, hit.t);
+        let mut shadow = ray;
+        shadow.t_max = (2.0 - 0.5) / -ray.d.y; // ends between the cover and the floor
+        assert_eq!(scene.occluded(&shadow), on_cover, "{ray:?}");
+    }
+    // Binomial: the share stopped is alpha within four standard deviations.
+    let n = crossing as f64;
+    let share = stopped as f64 / n;
+    let sd = (alpha as f64 * (1.0 - alpha as f64) / n).sqrt();
+    assert!(crossing > 5000, "{crossing} rays crossed the cover");
+    assert!(
+        (share - alpha as f64).abs() < 4.0 * sd,
+        "{share} stopped, alpha {alpha}"
+    );
+}

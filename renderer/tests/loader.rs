@@ -783,3 +783,23 @@ fn an_unlit_material_emits_its_base_colour_and_reflects_nothing() {
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn alpha_modes_and_cutoffs_are_read() {
+    use caustica_renderer::material::AlphaMode;
+    let dir = temp_dir("alpha");
+    let mut v = to_gltf(&cornell_box(false));
+    v["materials"][0]["alphaMode"] = json!("MASK");
+    v["materials"][0]["alphaCutoff"] = json!(0.3);
+    v["materials"][1]["alphaMode"] = json!("BLEND");
+    v["materials"][1]["pbrMetallicRoughness"]["baseColorFactor"] = json!([1.0, 1.0, 1.0, 0.25]);
+    v["materials"][2]["alphaMode"] = json!("MASK");
+    let desc = load_description(&write_json(&dir, "alpha.gltf", &v)).unwrap();
+    let m = &desc.materials;
+    assert_eq!(m[0].alpha_mode, AlphaMode::Mask(0.3));
+    assert_eq!((m[1].alpha_mode, m[1].alpha), (AlphaMode::Blend, 0.25));
+    // The spec's default cutoff.
+    assert_eq!(m[2].alpha_mode, AlphaMode::Mask(0.5));
+    assert_eq!((m[3].alpha_mode, m[3].alpha), (AlphaMode::Opaque, 1.0));
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -158,6 +158,21 @@ pub struct Material {
     pub emissive_texture: Option<TextureRef>,
     pub normal_texture: Option<(TextureRef, f32)>,
     pub double_sided: bool,
+    /// baseColorFactor's alpha (times the base colour texture's alpha where there is one).
+    pub alpha: f32,
+    pub alpha_mode: AlphaMode,
+}
+
+/// glTF's alphaMode (spec 3.9.4): how a surface's alpha decides where it is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha ignored: the surface is everywhere.
+    Opaque,
+    /// A cut-out: the surface is where alpha >= the cutoff, and nothing elsewhere.
+    Mask(f32),
+    /// Partly there: a ray finds the surface with probability alpha (stochastic
+    /// transparency), so on average it lets 1 - alpha of the light through.
+    Blend,
 }
 
 impl Default for Material {
@@ -175,6 +190,8 @@ impl Default for Material {
             emissive_texture: None,
             normal_texture: None,
             double_sided: false,
+            alpha: 1.0,
+            alpha_mode: AlphaMode::Opaque,
         }
     }
 }
@@ -240,6 +257,11 @@ impl Material {
         } else {
             MaterialKind::MetallicRoughness
         }
+    }
+
+    /// Alpha at a point with texture coordinates `uv`.
+    pub fn alpha_at(&self, textures: &[Texture], uv: &TexCoords) -> f32 {
+        self.alpha * Self::texture_rgba(textures, self.base_color_texture, uv).w
     }
 
     /// Every texture the material reads.

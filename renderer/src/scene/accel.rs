@@ -16,7 +16,7 @@
 
 use crate::geometry::Ray;
 use crate::scene::traversal::{self, Isa};
-use crate::scene::triangle::RayShear;
+use crate::scene::triangle::{RayShear, TriangleHit};
 use glam::{Vec3, Vec3A};
 use obvhs::{Boundable, BvhBuildParams, aabb::Aabb, cwbvh::CwBvh, cwbvh::builder::build_cwbvh};
 use std::time::Duration;
@@ -43,6 +43,9 @@ pub struct Accel {
     prim_to_triangle: Vec<u32>,
     scale: f32,
     isa: Isa,
+    /// Whether each BVH primitive is a cut-out whose hits must be confirmed (alpha); empty
+    /// when the scene has none, so opaque scenes never ask.
+    cutout: Vec<bool>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -66,7 +69,8 @@ fn power_of_two_scale(extent: f32) -> f32 {
 
 impl Accel {
     /// Builds the BVH over world-space triangles; `extent` is the largest absolute coordinate.
-    pub fn build(triangles: &[[Vec3; 3]], extent: f32) -> Accel {
+    /// `cutout` says, per triangle, which hits must be confirmed (empty: none).
+    pub fn build(triangles: &[[Vec3; 3]], extent: f32, cutout: &[bool]) -> Accel {
         let scale = power_of_two_scale(extent);
         if triangles.is_empty() {
             return Accel {
@@ -75,6 +79,7 @@ impl Accel {
                 prim_to_triangle: Vec::new(),
                 scale,
                 isa: Isa::detect(),
+                cutout: Vec::new(),
             };
         }
         let scaled: Vec<[Vec3; 3]> = triangles.iter().map(|t| t.map(|p| p * scale)).collect();
@@ -95,12 +100,21 @@ impl Accel {
             .iter()
             .map(|&i| scaled[i as usize])
             .collect();
+        let cutout = if cutout.iter().any(|&c| c) {
+            prim_to_triangle
+                .iter()
+                .map(|&t| cutout[t as usize])
+                .collect()
+        } else {
+            Vec::new()
+        };
         Accel {
             bvh: Some(bvh),
             tris,
             prim_to_triangle,
             scale,
             isa: Isa::detect(),
+            cutout,
         }
     }
 
@@ -123,14 +137,30 @@ impl Accel {
             size_of_val(b.nodes.as_slice()) + size_of_val(b.primitive_indices.as_slice())
         }) + size_of_val(self.tris.as_slice())
             + size_of_val(self.prim_to_triangle.as_slice())
+            + size_of_val(self.cutout.as_slice())
     }
 
-    /// Closest hit in `(0, ray.t_max)`.
+    /// Closest hit in `(0, ray.t_max)`, of an opaque scene.
     pub fn intersect(&self, ray: &Ray) -> Option<AccelHit> {
+        self.intersect_accepted(ray, |_, _| true)
+    }
+
+    /// Closest hit in `(0, ray.t_max)` that `accept(triangle, barycentrics)` takes, where the
+    /// triangle is a cut-out.
+    pub fn intersect_accepted(
+        &self,
+        ray: &Ray,
+        accept: impl Fn(u32, Vec3) -> bool,
+    ) -> Option<AccelHit> {
         let bvh = self.bvh.as_ref()?;
         let bvh_ray = self.to_bvh_ray(ray)?;
         let shear = RayShear::new(Vec3::from(bvh_ray.origin), ray.d);
-        let (id, h) = traversal::walk::<false>(self.isa, bvh, &self.tris, bvh_ray, &shear)?;
+        let (id, h) = if self.cutout.is_empty() {
+            traversal::walk::<false>(self.isa, bvh, &self.tris, bvh_ray, &shear, &|_, _| true)
+        } else {
+            let accept = self.confirm(accept);
+            traversal::walk::<false>(self.isa, bvh, &self.tris, bvh_ray, &shear, &accept)
+        }?;
         Some(AccelHit {
             t: h.t / self.scale,
             triangle: self.prim_to_triangle[id as usize],
@@ -138,13 +168,29 @@ impl Accel {
         })
     }
 
-    /// True if anything blocks the ray before `ray.t_max`.
+    /// The walk's test of a hit on BVH primitive `id`: cut-outs ask `accept`.
+    fn confirm(&self, accept: impl Fn(u32, Vec3) -> bool) -> impl Fn(u32, &TriangleHit) -> bool {
+        move |id, h| !self.cutout[id as usize] || accept(self.prim_to_triangle[id as usize], h.b)
+    }
+
+    /// True if anything blocks the ray before `ray.t_max`, in an opaque scene.
     pub fn occluded(&self, ray: &Ray) -> bool {
+        self.occluded_accepted(ray, |_, _| true)
+    }
+
+    /// True if a hit that `accept` takes (see `intersect_accepted`) blocks the ray.
+    pub fn occluded_accepted(&self, ray: &Ray, accept: impl Fn(u32, Vec3) -> bool) -> bool {
         let (Some(bvh), Some(bvh_ray)) = (self.bvh.as_ref(), self.to_bvh_ray(ray)) else {
             return false;
         };
         let shear = RayShear::new(Vec3::from(bvh_ray.origin), ray.d);
-        traversal::walk::<true>(self.isa, bvh, &self.tris, bvh_ray, &shear).is_some()
+        let hit = if self.cutout.is_empty() {
+            traversal::walk::<true>(self.isa, bvh, &self.tris, bvh_ray, &shear, &|_, _| true)
+        } else {
+            let accept = self.confirm(accept);
+            traversal::walk::<true>(self.isa, bvh, &self.tris, bvh_ray, &shear, &accept)
+        };
+        hit.is_some()
     }
 }
 
@@ -167,7 +213,7 @@ mod tests {
                 [0, 1, 2].map(|_| c + (point(&mut s) - 0.5) * 1.5)
             })
             .collect();
-        let mut accel = Accel::build(&tris, 6.0);
+        let mut accel = Accel::build(&tris, 6.0, &[]);
         let rays: Vec<Ray> = (0..20_000)
             .map(|i| {
                 s.start_pixel_sample(i, 1);

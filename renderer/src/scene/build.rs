@@ -14,7 +14,7 @@ use crate::light::area::AreaLight;
 use crate::light::environment::UniformEnvironment;
 use crate::light::punctual::{DirectionalLight, PointLight, SpotLight};
 use crate::light::sampler::PowerLightSampler;
-use crate::material::Material;
+use crate::material::{AlphaMode, Material};
 use crate::texture::Texture;
 use crate::texture_footprint::LuminancePrefix;
 use glam::{Vec2, Vec3};
@@ -91,7 +91,11 @@ impl Scene {
 
         let start = Instant::now();
         let extent = bounds.min.abs().max(bounds.max.abs()).max_element();
-        let accel = Accel::build(&positions, extent);
+        let cutout: Vec<bool> = attributes
+            .iter()
+            .map(|a| materials[a.material as usize].alpha_mode != AlphaMode::Opaque)
+            .collect();
+        let accel = Accel::build(&positions, extent, &cutout);
         let info = SceneInfo {
             name,
             triangles: positions.len(),

@@ -5,7 +5,7 @@
 //! panic inside the gltf crate is caught and reported as an error.
 
 use crate::camera::CameraDesc;
-use crate::material::{Material, TextureRef};
+use crate::material::{AlphaMode, Material, TextureRef};
 use crate::scene::{MeshDesc, PunctualLightDesc, Scene, SceneDescription, SceneError};
 use crate::texture::{Texture, Wrap};
 use glam::{Affine2, Affine3A, Mat3, Mat4, Quat, Vec2, Vec3};
@@ -475,6 +475,12 @@ impl Loader<'_> {
             ior: m.ior().unwrap_or(1.5),
             emission: Vec3::from(m.emissive_factor()) * strength,
             double_sided: m.double_sided(),
+            alpha: base[3].clamp(0.0, 1.0),
+            alpha_mode: match m.alpha_mode() {
+                gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+                gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
+                gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+            },
             ..Default::default()
         };
         let label = material.name.clone();
@@ -487,6 +493,11 @@ impl Loader<'_> {
                 material.emission.is_finite() && material.emission.min_element() >= 0.0,
             ),
             ("ior", material.ior.is_finite() && material.ior > 0.0),
+            ("baseColorFactor alpha", material.alpha.is_finite()),
+            (
+                "alphaCutoff",
+                !matches!(material.alpha_mode, AlphaMode::Mask(c) if !c.is_finite()),
+            ),
         ];
         for (what, ok) in checks {
             if !ok {

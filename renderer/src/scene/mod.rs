@@ -14,7 +14,7 @@ use crate::geometry::{Bounds3, Frame, Ray, interpolate2, interpolate3, offset_ra
 use crate::light::area::AreaLight;
 use crate::light::sampler::PowerLightSampler;
 use crate::light::{Light, LightLiSample, LightSampleContext};
-use crate::material::{Bsdf, Material};
+use crate::material::{AlphaMode, Bsdf, Material};
 use crate::texture::{TexCoords, Texture};
 use accel::Accel;
 use glam::{Vec2, Vec3};
@@ -242,7 +242,9 @@ impl Scene {
 
     /// Closest surface hit along the ray.
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
-        let hit = self.accel.intersect(ray)?;
+        let hit = self
+            .accel
+            .intersect_accepted(ray, |t, b| self.surface_is_there(t, b, ray))?;
         let t = hit.triangle as usize;
         let p = &self.positions[t];
         let attr = &self.attributes[t];
@@ -293,7 +295,22 @@ impl Scene {
 
     /// True if something blocks the ray before `ray.t_max`.
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.accel.occluded(ray)
+        self.accel
+            .occluded_accepted(ray, |t, b| self.surface_is_there(t, b, ray))
+    }
+
+    /// Whether a ray that meets triangle `t` (a cut-out) at barycentrics `b` finds it there:
+    /// where alpha reaches the cutoff (MASK), or with probability alpha (BLEND), decided by
+    /// a hash of the ray and the triangle so that the answer is the same every time the same
+    /// ray asks, on any thread.
+    fn surface_is_there(&self, t: u32, b: Vec3, ray: &Ray) -> bool {
+        let material = self.triangle_material(t);
+        let alpha = || material.alpha_at(&self.textures, &self.tex_coords(t as usize, b));
+        match material.alpha_mode {
+            AlphaMode::Opaque => true,
+            AlphaMode::Mask(cutoff) => alpha() >= cutoff,
+            AlphaMode::Blend => alpha() > coverage_hash(ray, t),
+        }
     }
 
     pub fn bsdf(&self, si: &SurfaceInteraction) -> Bsdf {
@@ -356,4 +373,17 @@ fn dpdu(p: &[Vec3; 3], uv: &[Vec2; 3]) -> Option<Vec3> {
         return None;
     }
     Some((duv12.y * dp02 - duv02.y * dp12) / det)
+}
+
+/// A number in [0, 1) fixed by the ray and the triangle (stochastic transparency's draw).
+fn coverage_hash(ray: &Ray, triangle: u32) -> f32 {
+    let words = [ray.o.to_array(), ray.d.to_array()].concat();
+    let mut h = 0x9e37_79b9_7f4a_7c15u64 ^ triangle as u64;
+    for w in words {
+        // SplitMix64's finaliser after each word.
+        h = (h ^ w.to_bits() as u64).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        h ^= h >> 31;
+    }
+    h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    ((h ^ (h >> 31)) >> 40) as f32 / (1u64 << 24) as f32
 }

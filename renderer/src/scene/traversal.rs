@@ -49,21 +49,25 @@ impl Isa {
     }
 }
 
-/// The BVH primitive index and the hit of a triangle in `(0, ray.tmax)`: the nearest, or with
-/// `ANY_HIT` the first found (for shadow rays, which only ask whether there is one).
+/// The BVH primitive index and the hit of a triangle in `(0, ray.tmax)` that `accept` takes
+/// (it turns down hits on the transparent parts of cut-outs): the nearest, or with `ANY_HIT`
+/// the first found (for shadow rays, which only ask whether there is one).
 pub fn walk<const ANY_HIT: bool>(
     isa: Isa,
     bvh: &CwBvh,
     tris: &[[Vec3; 3]],
     ray: Ray,
     shear: &RayShear,
+    accept: &impl Fn(u32, &TriangleHit) -> bool,
 ) -> Option<(u32, TriangleHit)> {
     match isa {
-        Isa::Baseline => walk_kernel::<ANY_HIT>(bvh, tris, ray, shear, CwBvhNode::intersect_ray),
+        Isa::Baseline => {
+            walk_kernel::<ANY_HIT>(bvh, tris, ray, shear, CwBvhNode::intersect_ray, accept)
+        }
         // SAFETY: `Isa::Avx2` is only produced by `Isa::detect` when the CPU has every feature
         // the function is compiled for.
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => unsafe { walk_avx2::<ANY_HIT>(bvh, tris, ray, shear) },
+        Isa::Avx2 => unsafe { walk_avx2::<ANY_HIT>(bvh, tris, ray, shear, accept) },
     }
 }
 
@@ -74,10 +78,16 @@ fn walk_avx2<const ANY_HIT: bool>(
     tris: &[[Vec3; 3]],
     ray: Ray,
     shear: &RayShear,
+    accept: &impl Fn(u32, &TriangleHit) -> bool,
 ) -> Option<(u32, TriangleHit)> {
-    walk_kernel::<ANY_HIT>(bvh, tris, ray, shear, |node, ray, oct| {
-        intersect_node_avx2(node, ray, oct)
-    })
+    walk_kernel::<ANY_HIT>(
+        bvh,
+        tris,
+        ray,
+        shear,
+        |node, ray, oct| intersect_node_avx2(node, ray, oct),
+        accept,
+    )
 }
 
 /// obvhs' `CwBvhNode::intersect_ray_simd` for eight children at once: the slab test of the
@@ -155,6 +165,7 @@ fn walk_kernel<const ANY_HIT: bool>(
     mut ray: Ray,
     shear: &RayShear,
     intersect_node: impl Fn(&CwBvhNode, &Ray, u32) -> u32,
+    accept: &impl Fn(u32, &TriangleHit) -> bool,
 ) -> Option<(u32, TriangleHit)> {
     let mut best = None;
     let mut state = bvh.new_traversal(ray.direction);
@@ -169,7 +180,9 @@ fn walk_kernel<const ANY_HIT: bool>(
                 let [p0, p1, p2] = tris[state.primitive_id as usize];
                 // A hit is only reported inside (0, tmax), and tmax then shrinks to it, so the
                 // last hit kept is the nearest.
-                if let Some(h) = intersect_triangle(shear, ray.tmax, p0, p1, p2) {
+                if let Some(h) = intersect_triangle(shear, ray.tmax, p0, p1, p2)
+                    && accept(state.primitive_id, &h)
+                {
                     best = Some((state.primitive_id, h));
                     if ANY_HIT {
                         break 'walk;
