@@ -70,6 +70,7 @@ pub fn uv_sphere(
         normals: Some(normals),
         uvs: Some(uvs),
         uvs1: None,
+        colors: None,
         indices,
         material,
     }
@@ -88,6 +89,7 @@ pub fn quad(name: &str, p: [Vec3; 4], material: u32) -> MeshDesc {
             Vec2::new(0.0, 0.0),
         ]),
         uvs1: None,
+        colors: None,
         indices: vec![0, 1, 2, 0, 2, 3],
         material,
     }

@@ -220,7 +220,7 @@ fn uniform_environment_on_diffuse_and_glossy_planes() {
         roughness: 0.3,
         ..Default::default()
     };
-    let bsdf = glossy.bsdf(&[], &[Vec2::ZERO; 2]);
+    let bsdf = glossy.bsdf(&[], &[Vec2::ZERO; 2], Vec3::ONE);
     // Local frame of the plane: normal +y maps to +z; only the angle to the normal matters.
     let to_eye = EYE.normalize();
     let wo = Vec3::new((1.0 - to_eye.y * to_eye.y).sqrt(), 0.0, to_eye.y);

@@ -803,3 +803,62 @@ fn alpha_modes_and_cutoffs_are_read() {
     assert_eq!((m[3].alpha_mode, m[3].alpha), (AlphaMode::Opaque, 1.0));
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn vertex_colours_multiply_the_base_colour() {
+    use caustica_renderer::scene::MeshDesc;
+    let dir = temp_dir("colours");
+    let floor = || {
+        quad(
+            "floor",
+            [
+                Vec3::new(-1., 0., 1.),
+                Vec3::new(1., 0., 1.),
+                Vec3::new(1., 0., -1.),
+                Vec3::new(-1., 0., -1.),
+            ],
+            0,
+        )
+    };
+    let scene_of = |mesh: MeshDesc, base: Vec3, name: &str| {
+        let desc = SceneDescription {
+            meshes: vec![mesh],
+            materials: vec![Material::diffuse(base)],
+            ..Default::default()
+        };
+        load(&write_json(&dir, name, &to_gltf(&desc))).unwrap()
+    };
+    // A constant COLOR_0 on a white material reads like the same colour as the factor.
+    let c = glam::Vec4::new(0.2, 0.6, 0.9, 1.0);
+    let mut coloured = floor();
+    coloured.colors = Some(vec![c; 4]);
+    let by_vertex = scene_of(coloured, Vec3::ONE, "vertex.gltf");
+    let by_factor = scene_of(floor(), c.truncate(), "factor.gltf");
+    for (x, z) in [(0.3, 0.2), (-0.7, 0.5), (0.9, -0.9)] {
+        // Equal but for the rounding of interpolating three equal colours (a few ulps).
+        let (v, f) = (
+            base_colour_at(&by_vertex, x, z),
+            base_colour_at(&by_factor, x, z),
+        );
+        assert!((v - f).abs().max_element() <= 1e-6, "{v} against {f}");
+    }
+    // Different colours at the corners: at the centre (on the diagonal 0-2 both triangles
+    // share) the colour is the mean of corners 0 and 2, times the factor.
+    let corners = [
+        glam::Vec4::new(1.0, 0.0, 0.0, 1.0),
+        glam::Vec4::new(0.0, 1.0, 0.0, 1.0),
+        glam::Vec4::new(0.0, 0.0, 1.0, 1.0),
+        glam::Vec4::new(0.5, 0.5, 0.5, 1.0),
+    ];
+    let mut graded = floor();
+    graded.colors = Some(corners.to_vec());
+    let factor = Vec3::new(0.5, 0.8, 1.0);
+    let scene = scene_of(graded, factor, "graded.gltf");
+    let expected = (corners[0] + corners[2]).truncate() * 0.5 * factor;
+    let got = base_colour_at(&scene, 0.0, 0.0);
+    assert!(
+        (got - expected).abs().max_element() < 1e-5,
+        "{got} against {expected}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

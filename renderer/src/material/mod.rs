@@ -285,9 +285,10 @@ impl Material {
             .map_or(glam::Vec4::ONE, |(tex, uv)| tex.lookup(uv))
     }
 
-    /// The BSDF at a point with texture coordinates `uv`.
-    pub fn bsdf(&self, textures: &[Texture], uv: &TexCoords) -> Bsdf {
+    /// The BSDF at a point with texture coordinates `uv` and vertex colour `vertex_color`.
+    pub fn bsdf(&self, textures: &[Texture], uv: &TexCoords, vertex_color: Vec3) -> Bsdf {
         let base = (self.base_color
+            * vertex_color
             * Self::texture_rgba(textures, self.base_color_texture, uv).truncate())
         .clamp(Vec3::ZERO, Vec3::ONE);
         match self.kind() {

@@ -17,7 +17,7 @@ use crate::light::sampler::PowerLightSampler;
 use crate::material::{AlphaMode, Material};
 use crate::texture::Texture;
 use crate::texture_footprint::LuminancePrefix;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
@@ -27,6 +27,8 @@ struct Triangles {
     attributes: Vec<TriangleAttributes>,
     /// TEXCOORD_1 of every triangle, or nothing when no mesh has it.
     uvs1: Vec<[Vec2; 3]>,
+    /// COLOR_0 of every triangle, or nothing when no mesh has it.
+    colors: Vec<[Vec4; 3]>,
     bounds: Bounds3,
     /// Degenerate (zero-area) triangles dropped.
     dropped: usize,
@@ -59,6 +61,7 @@ impl Scene {
             positions,
             attributes,
             uvs1,
+            colors,
             bounds,
             dropped,
         } = triangles;
@@ -111,6 +114,7 @@ impl Scene {
             positions,
             attributes,
             uvs1,
+            colors,
             materials,
             textures,
             lights,
@@ -165,6 +169,9 @@ fn validate_mesh(mesh: &MeshDesc) -> Result<(), SceneError> {
     if let Some(uvs) = &mesh.uvs1 {
         check_len(uvs.len(), "second texture coordinates")?;
     }
+    if let Some(colors) = &mesh.colors {
+        check_len(colors.len(), "vertex colours")?;
+    }
     Ok(())
 }
 
@@ -176,6 +183,8 @@ fn flatten_meshes(meshes: &[MeshDesc], material_count: u32) -> Result<Triangles,
     let mut attributes = Vec::new();
     let second_set = meshes.iter().any(|m| m.uvs1.is_some());
     let mut uvs1 = Vec::new();
+    let vertex_colors = meshes.iter().any(|m| m.colors.is_some());
+    let mut colors = Vec::new();
     let mut dropped = 0usize;
     let mut bounds = Bounds3::EMPTY;
     for mesh in meshes {
@@ -212,6 +221,15 @@ fn flatten_meshes(meshes: &[MeshDesc], material_count: u32) -> Result<Triangles,
             if second_set {
                 uvs1.push(corners(mesh.uvs1.as_ref()).unwrap_or(uvs));
             }
+            if vertex_colors {
+                // Colours are factors in [0, 1]; anything else (NaN included) is white.
+                let valid = |c: Vec4| c.is_finite() && c.cmpge(Vec4::ZERO).all();
+                let c = mesh.colors.as_ref().map(|c| idx.map(|i| c[i]));
+                colors.push(
+                    c.filter(|c| c.iter().all(|&c| valid(c)))
+                        .unwrap_or([Vec4::ONE; 3]),
+                );
+            }
             for q in p {
                 bounds = bounds.union_point(q);
             }
@@ -234,6 +252,7 @@ fn flatten_meshes(meshes: &[MeshDesc], material_count: u32) -> Result<Triangles,
         positions,
         attributes,
         uvs1,
+        colors,
         bounds,
         dropped,
     })

@@ -8,7 +8,7 @@ use crate::camera::CameraDesc;
 use crate::material::{AlphaMode, Material, TextureRef};
 use crate::scene::{MeshDesc, PunctualLightDesc, Scene, SceneDescription, SceneError};
 use crate::texture::{Texture, Wrap};
-use glam::{Affine2, Affine3A, Mat3, Mat4, Quat, Vec2, Vec3};
+use glam::{Affine2, Affine3A, Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::Path;
 use std::time::Instant;
@@ -446,12 +446,17 @@ impl Loader<'_> {
                 .then(|| reader.read_tex_coords(1))
                 .flatten()
                 .map(|t| t.into_f32().map(Vec2::from).collect::<Vec<_>>());
+            // COLOR_0 is linear (spec 3.7.2.1); RGB colours have alpha 1.
+            let colors = reader
+                .read_colors(0)
+                .map(|c| c.into_rgba_f32().map(Vec4::from).collect::<Vec<_>>());
             self.desc.meshes.push(MeshDesc {
                 name: name.clone(),
                 positions,
                 normals,
                 uvs,
                 uvs1,
+                colors,
                 indices,
                 material,
             });

@@ -102,6 +102,18 @@ fn gltf_parts(desc: &SceneDescription) -> (Value, Vec<u8>) {
                 json!({"componentType": 5126, "count": uv.len(), "type": "VEC2"})
             ));
         }
+        if let Some(colors) = &mesh.colors {
+            let data: Vec<u8> = colors
+                .iter()
+                .flat_map(|c| c.to_array())
+                .flat_map(f32::to_le_bytes)
+                .collect();
+            attributes["COLOR_0"] = json!(buf.push(
+                &data,
+                34962,
+                json!({"componentType": 5126, "count": colors.len(), "type": "VEC4"})
+            ));
+        }
         if let Some(uv) = &mesh.uvs1 {
             let data: Vec<u8> = uv
                 .iter()

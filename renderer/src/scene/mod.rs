@@ -17,7 +17,7 @@ use crate::light::{Light, LightLiSample, LightSampleContext};
 use crate::material::{AlphaMode, Bsdf, Material};
 use crate::texture::{TexCoords, Texture};
 use accel::Accel;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -52,6 +52,8 @@ pub struct MeshDesc {
     pub uvs: Option<Vec<Vec2>>,
     /// The second set of texture coordinates (TEXCOORD_1), for textures that ask for it.
     pub uvs1: Option<Vec<Vec2>>,
+    /// Linear RGBA vertex colours (COLOR_0), which multiply the base colour and its alpha.
+    pub colors: Option<Vec<Vec4>>,
     /// Three indices per triangle, counter-clockwise seen from the front.
     pub indices: Vec<u32>,
     pub material: u32,
@@ -120,6 +122,8 @@ pub struct SurfaceInteraction {
     pub n: Vec3,
     pub shading: Frame,
     pub uv: TexCoords,
+    /// The interpolated vertex colour (COLOR_0), white where the mesh has none.
+    pub vertex_color: Vec4,
     pub wo: Vec3,
     pub triangle: u32,
 }
@@ -175,6 +179,8 @@ pub struct Scene {
     pub attributes: Vec<TriangleAttributes>,
     /// Each triangle's TEXCOORD_1 at its corners; empty when no mesh has a second set.
     pub uvs1: Vec<[Vec2; 3]>,
+    /// Each triangle's vertex colours; empty when no mesh has COLOR_0.
+    pub colors: Vec<[Vec4; 3]>,
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub lights: Vec<Light>,
@@ -212,6 +218,7 @@ impl Scene {
             geometry: size_of_val(self.positions.as_slice())
                 + size_of_val(self.attributes.as_slice())
                 + size_of_val(self.uvs1.as_slice())
+                + size_of_val(self.colors.as_slice())
                 + size_of_val(self.materials.as_slice()),
             bvh: self.accel.memory_bytes(),
             textures: self.textures.iter().map(Texture::texel_bytes).sum(),
@@ -229,6 +236,13 @@ impl Scene {
     pub fn triangle_point(&self, triangle: u32, b: Vec3) -> (Vec3, TexCoords) {
         let t = triangle as usize;
         (interpolate3(&self.positions[t], b), self.tex_coords(t, b))
+    }
+
+    /// The vertex colour at barycentrics `b` of triangle `t`.
+    fn vertex_color(&self, t: usize, b: Vec3) -> Vec4 {
+        self.colors
+            .get(t)
+            .map_or(Vec4::ONE, |c| c[0] * b.x + c[1] * b.y + c[2] * b.z)
     }
 
     /// Both sets of texture coordinates at barycentrics `b` of triangle `t`.
@@ -288,6 +302,7 @@ impl Scene {
             n,
             shading,
             uv,
+            vertex_color: self.vertex_color(t, hit.b),
             wo: -ray.d,
             triangle: hit.triangle,
         })
@@ -305,7 +320,10 @@ impl Scene {
     /// ray asks, on any thread.
     fn surface_is_there(&self, t: u32, b: Vec3, ray: &Ray) -> bool {
         let material = self.triangle_material(t);
-        let alpha = || material.alpha_at(&self.textures, &self.tex_coords(t as usize, b));
+        let alpha = || {
+            let uv = self.tex_coords(t as usize, b);
+            material.alpha_at(&self.textures, &uv) * self.vertex_color(t as usize, b).w
+        };
         match material.alpha_mode {
             AlphaMode::Opaque => true,
             AlphaMode::Mask(cutoff) => alpha() >= cutoff,
@@ -315,7 +333,7 @@ impl Scene {
 
     pub fn bsdf(&self, si: &SurfaceInteraction) -> Bsdf {
         self.triangle_material(si.triangle)
-            .bsdf(&self.textures, &si.uv)
+            .bsdf(&self.textures, &si.uv, si.vertex_color.truncate())
     }
 
     /// Light index of the hit triangle, if it emits.
