@@ -49,6 +49,9 @@ pub struct Texture {
     mean_rgb: Vec3,
     pub wrap_s: Wrap,
     pub wrap_t: Wrap,
+    /// The sampler's magnification filter: bilinear, or the nearest texel (pixel art,
+    /// masks). Minification without mipmaps reads the same way.
+    pub nearest: bool,
 }
 
 /// The texel index `i` stands for under `wrap`, in `0..n`.
@@ -97,6 +100,7 @@ impl Texture {
             mean_rgb,
             wrap_s,
             wrap_t,
+            nearest: false,
         }
     }
 
@@ -122,6 +126,11 @@ impl Texture {
     pub fn lookup(&self, uv: Vec2) -> Vec4 {
         if self.texels.is_empty() || !uv.is_finite() {
             return Vec4::ONE;
+        }
+        if self.nearest {
+            let x = (uv.x * self.width as f32).floor() as i64;
+            let y = (uv.y * self.height as f32).floor() as i64;
+            return self.texel(x, y);
         }
         let x = uv.x * self.width as f32 - 0.5;
         let y = uv.y * self.height as f32 - 0.5;
@@ -191,5 +200,17 @@ mod tests {
             assert!((colour.mean_rgb()[k] - mean(srgb_to_linear, k)).abs() < 1e-6);
             assert!((data.mean_rgb()[k] - mean(|v| v, k)).abs() < 1e-6);
         }
+    }
+
+    #[test]
+    fn nearest_filtering_reads_one_texel_and_bilinear_blends_two() {
+        let texels = [0, 0, 0, 255, 255, 255, 255, 255];
+        let mut t = Texture::from_rgba8(2, 1, &texels, false, Wrap::Repeat, Wrap::Repeat);
+        assert_eq!(t.lookup(Vec2::new(0.5, 0.5)).x, 0.5);
+        t.nearest = true;
+        assert_eq!(t.lookup(Vec2::new(0.49, 0.5)).x, 0.0);
+        assert_eq!(t.lookup(Vec2::new(0.51, 0.5)).x, 1.0);
+        // Wrapped like bilinear lookups: u = 1.2 is texel 0 again.
+        assert_eq!(t.lookup(Vec2::new(1.2, 0.5)).x, 0.0);
     }
 }

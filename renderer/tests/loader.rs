@@ -862,3 +862,45 @@ fn vertex_colours_multiply_the_base_colour() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn morph_targets_at_their_default_weights_load_as_the_displaced_mesh() {
+    let dir = temp_dir("morph");
+    let desc = cornell_box(false);
+    let lift = Vec3::new(0.0, 0.25, 0.0);
+    // Target 0 lifts the floor's vertex 1, target 1 vertex 3; weights 0.5 and 1.
+    let mut moved = desc.clone();
+    moved.meshes[0].positions[1] += lift * 0.5;
+    moved.meshes[0].positions[3] += lift;
+    let truth = load_description(&write_json(&dir, "moved.gltf", &to_gltf(&moved))).unwrap();
+
+    let mut v = to_gltf(&desc);
+    let mut targets = Vec::new();
+    for vertex in [1, 3] {
+        let mut deltas = [Vec3::ZERO; 4];
+        deltas[vertex] = lift;
+        let bytes: Vec<u8> = deltas
+            .iter()
+            .flat_map(|d| d.to_array())
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        let view = push_buffer_view(&mut v, &bytes);
+        let accessors = v["accessors"].as_array_mut().unwrap();
+        accessors.push(
+            json!({"bufferView": view, "componentType": 5126, "count": 4,
+            "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [0.0, 0.25, 0.0]}),
+        );
+        targets.push(json!({"POSITION": accessors.len() - 1}));
+    }
+    v["meshes"][0]["primitives"][0]["targets"] = json!(targets);
+    v["meshes"][0]["weights"] = json!([0.5, 1.0]);
+    let morphed = load_description(&write_json(&dir, "morphed.gltf", &v)).unwrap();
+    assert_eq!(triangle_sets(&morphed), triangle_sets(&truth));
+
+    // The node's weights override the mesh's: all zero is the undisplaced mesh.
+    v["nodes"][0]["weights"] = json!([0.0, 0.0]);
+    let rest = load_description(&write_json(&dir, "rest.gltf", &v)).unwrap();
+    let original = load_description(&write_json(&dir, "original.gltf", &to_gltf(&desc))).unwrap();
+    assert_eq!(triangle_sets(&rest), triangle_sets(&original));
+    std::fs::remove_dir_all(dir).unwrap();
+}

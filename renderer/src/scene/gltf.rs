@@ -318,7 +318,15 @@ impl Loader<'_> {
             )));
         }
         if let Some(mesh) = node.mesh() {
-            self.add_mesh(&mesh, world)?;
+            if node.skin().is_some() {
+                self.desc.warnings.push(format!(
+                    "nodes[{}]: skin ignored, the mesh is shown in its bind pose",
+                    node.index()
+                ));
+            }
+            // The node's morph weights override the mesh's (spec 3.7.2.2).
+            let weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
+            self.add_mesh(&mesh, world, weights)?;
         }
         if let Some(camera) = node.camera()
             && self.desc.camera.is_none()
@@ -381,7 +389,14 @@ impl Loader<'_> {
         });
     }
 
-    fn add_mesh(&mut self, mesh: &gltf::Mesh, world: Mat4) -> Result<(), SceneError> {
+    /// The mesh's triangle primitives in world space, morphed by `weights` (spec 3.7.2.2:
+    /// each target's displacements, times its weight, added to the base attributes).
+    fn add_mesh(
+        &mut self,
+        mesh: &gltf::Mesh,
+        world: Mat4,
+        weights: &[f32],
+    ) -> Result<(), SceneError> {
         let name = mesh
             .name()
             .map_or_else(|| format!("mesh {}", mesh.index()), str::to_string);
@@ -403,14 +418,33 @@ impl Loader<'_> {
             let Some(positions) = reader.read_positions() else {
                 return Err(err(format!("{name}: primitive without POSITION")));
             };
+            let mut positions: Vec<Vec3> = positions.map(Vec3::from).collect();
+            let mut normals: Option<Vec<Vec3>> =
+                reader.read_normals().map(|ns| ns.map(Vec3::from).collect());
+            for (target, &weight) in reader.read_morph_targets().zip(weights) {
+                if weight == 0.0 || !weight.is_finite() {
+                    continue;
+                }
+                let (dp, dn, _) = target;
+                for (p, d) in positions.iter_mut().zip(dp.into_iter().flatten()) {
+                    *p += weight * Vec3::from(d);
+                }
+                if let Some(normals) = normals.as_mut() {
+                    for (n, d) in normals.iter_mut().zip(dn.into_iter().flatten()) {
+                        *n += weight * Vec3::from(d);
+                    }
+                }
+            }
             let positions: Vec<Vec3> = positions
-                .map(|p| world.transform_point3(Vec3::from(p)))
+                .into_iter()
+                .map(|p| world.transform_point3(p))
                 .collect();
             if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
                 return Err(err(format!("{name}: position {i} is NaN or infinite")));
             }
-            let normals = reader.read_normals().map(|ns| {
-                ns.map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero())
+            let normals = normals.map(|ns| {
+                ns.into_iter()
+                    .map(|n| (normal_matrix * n).normalize_or_zero())
                     .collect::<Vec<_>>()
             });
             let uvs = reader
@@ -629,7 +663,7 @@ impl Loader<'_> {
             gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
         };
         let sampler = texture.sampler();
-        let tex = Texture::from_rgba8(
+        let mut tex = Texture::from_rgba8(
             w,
             h,
             &rgba,
@@ -637,6 +671,7 @@ impl Loader<'_> {
             wrap(sampler.wrap_s()),
             wrap(sampler.wrap_t()),
         );
+        tex.nearest = sampler.mag_filter() == Some(gltf::texture::MagFilter::Nearest);
         let i = self.desc.textures.len() as u32;
         self.desc.textures.push(tex);
         self.texture_index.insert(key, i);
