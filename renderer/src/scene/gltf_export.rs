@@ -40,6 +40,25 @@ impl BufferWriter {
     }
 }
 
+/// The little-endian bytes of a vertex attribute of N floats per vertex, its count and its
+/// accessor type.
+fn floats<T, const N: usize>(
+    values: &[T],
+    components: impl Fn(&T) -> [f32; N],
+) -> (Vec<u8>, usize, &'static str) {
+    let data = values
+        .iter()
+        .flat_map(|v| components(v))
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let kind = match N {
+        2 => "VEC2",
+        3 => "VEC3",
+        _ => "VEC4",
+    };
+    (data, values.len(), kind)
+}
+
 fn light_color(c: Vec3) -> (Vec3, f32) {
     let m = c.max_element();
     if m > 0.0 {
@@ -90,41 +109,28 @@ fn gltf_parts(desc: &SceneDescription) -> (Value, Vec<u8>) {
         if let Some(n) = &mesh.normals {
             attributes["NORMAL"] = json!(buf.vec3s(n));
         }
-        if let Some(uv) = &mesh.uvs {
-            let data: Vec<u8> = uv
-                .iter()
-                .flat_map(|t| t.to_array())
-                .flat_map(f32::to_le_bytes)
-                .collect();
-            attributes["TEXCOORD_0"] = json!(buf.push(
-                &data,
-                34962,
-                json!({"componentType": 5126, "count": uv.len(), "type": "VEC2"})
-            ));
-        }
-        if let Some(colors) = &mesh.colors {
-            let data: Vec<u8> = colors
-                .iter()
-                .flat_map(|c| c.to_array())
-                .flat_map(f32::to_le_bytes)
-                .collect();
-            attributes["COLOR_0"] = json!(buf.push(
-                &data,
-                34962,
-                json!({"componentType": 5126, "count": colors.len(), "type": "VEC4"})
-            ));
-        }
-        if let Some(uv) = &mesh.uvs1 {
-            let data: Vec<u8> = uv
-                .iter()
-                .flat_map(|t| t.to_array())
-                .flat_map(f32::to_le_bytes)
-                .collect();
-            attributes["TEXCOORD_1"] = json!(buf.push(
-                &data,
-                34962,
-                json!({"componentType": 5126, "count": uv.len(), "type": "VEC2"})
-            ));
+        let sets = [
+            (
+                "TEXCOORD_0",
+                mesh.uvs.as_ref().map(|uv| floats(uv, |t| t.to_array())),
+            ),
+            (
+                "TEXCOORD_1",
+                mesh.uvs1.as_ref().map(|uv| floats(uv, |t| t.to_array())),
+            ),
+            (
+                "COLOR_0",
+                mesh.colors.as_ref().map(|c| floats(c, |c| c.to_array())),
+            ),
+        ];
+        for (name, values) in sets {
+            if let Some((data, count, kind)) = values {
+                attributes[name] = json!(buf.push(
+                    &data,
+                    34962,
+                    json!({"componentType": 5126, "count": count, "type": kind})
+                ));
+            }
         }
         let idx: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
         let indices = buf.push(
