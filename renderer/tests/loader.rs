@@ -302,7 +302,8 @@ fn broken_files_give_errors_naming_file_and_problem() {
     v["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
     expect_error(
         &write_json(&dir, "required-extension.gltf", &v),
-        "unsupported extension KHR_draco_mesh_compression",
+        "unsupported extension KHR_draco_mesh_compression: export the model again without mesh \
+         compression",
     );
 
     let mut v = good.clone();

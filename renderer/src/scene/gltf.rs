@@ -52,7 +52,10 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
     let (root, blob) = parse(&bytes)?;
     for ext in &root.extensions_required {
         if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
-            return Err(err(format!("requires the unsupported extension {ext}")));
+            return Err(err(format!(
+                "requires the unsupported extension {ext}{}",
+                what_to_do(ext)
+            )));
         }
     }
     let ignored_extensions: Vec<String> = root
@@ -111,6 +114,20 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
         return Err(err("the scene has no triangle meshes"));
     }
     Ok(loader.desc)
+}
+
+/// How a user gets a file that requires `ext` into a form we read, for the extensions that
+/// compress what we would otherwise read.
+fn what_to_do(ext: &str) -> &'static str {
+    match ext {
+        "KHR_draco_mesh_compression" | "EXT_meshopt_compression" => {
+            ": export the model again without mesh compression"
+        }
+        "KHR_texture_basisu" | "EXT_texture_webp" | "MSFT_texture_dds" => {
+            ": export the model again with PNG or JPEG textures"
+        }
+        _ => "",
+    }
 }
 
 /// The JSON document and the binary chunk of a `.gltf` or `.glb` file. A scene without a
