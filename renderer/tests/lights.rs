@@ -205,6 +205,50 @@ fn textured_area_light_whose_black_triangles_are_no_lights() {
 }
 
 #[test]
+fn an_absorbing_glass_slab_in_front_of_an_area_light() {
+    // Seen head-on through a slab of glass (ior 1.5) of thickness 1 whose inside keeps tau of
+    // the light crossing it (KHR_materials_volume), a uniform emitter of radiance 1 gives
+    // the slab's transmittance with its internal reflections summed:
+    // (1 - R)^2 tau / (1 - R^2 tau^2), R = ((1.5 - 1) / (1.5 + 1))^2 at normal incidence.
+    use caustica_renderer::procedural::cuboid;
+    let tau = 0.5f64;
+    let glass = Material {
+        absorption: Vec3::splat(-(tau.ln() as f32)),
+        ..Material::glass(1.5)
+    };
+    let emitter = Material {
+        emission: Vec3::ONE,
+        ..Material::diffuse(Vec3::ZERO)
+    };
+    let s = 10.0;
+    let desc = SceneDescription {
+        meshes: vec![
+            cuboid(
+                "slab",
+                glam::Affine3A::from_scale(Vec3::new(4.0, 4.0, 1.0)),
+                0,
+            ),
+            quad(
+                "light",
+                [
+                    Vec3::new(-s, -s, -2.),
+                    Vec3::new(s, -s, -2.),
+                    Vec3::new(s, s, -2.),
+                    Vec3::new(-s, s, -2.),
+                ],
+                1,
+            ),
+        ],
+        materials: vec![glass, emitter],
+        camera: Some(camera_looking(Vec3::new(0., 0., 5.), Vec3::ZERO, 0.05)),
+        ..Default::default()
+    };
+    let r = 0.04f64;
+    let exact = (1.0 - r).powi(2) * tau / (1.0 - r * r * tau * tau);
+    assert_close("absorbing slab", render_mean(desc, 64), exact);
+}
+
+#[test]
 fn uniform_environment_on_diffuse_and_glossy_planes() {
     // No emitter: the environment of radiance 1 lights the upper hemisphere. A diffuse plane
     // reflects rho; a glossy one its directional albedo, computed here independently by

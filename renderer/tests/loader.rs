@@ -905,3 +905,32 @@ fn morph_targets_at_their_default_weights_load_as_the_displaced_mesh() {
     assert_eq!(triangle_sets(&rest), triangle_sets(&original));
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn volume_attenuation_becomes_an_absorption_coefficient() {
+    let dir = temp_dir("volume");
+    let mut v = to_gltf(&cornell_box(true));
+    let glass = v["materials"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|m| m["name"] == "glass")
+        .unwrap();
+    let volume = |thickness: f32| {
+        json!({"KHR_materials_transmission": {"transmissionFactor": 1.0},
+            "KHR_materials_volume": {"thicknessFactor": thickness,
+                "attenuationDistance": 2.0, "attenuationColor": [0.5, 0.25, 1.0]}})
+    };
+    v["materials"][glass]["extensions"] = volume(1.0);
+    v["extensionsUsed"] = json!(["KHR_materials_transmission", "KHR_materials_volume"]);
+    let desc = load_description(&write_json(&dir, "volume.gltf", &v)).unwrap();
+    // sigma_a = -ln(color) / distance: half the light left after 2 units in red.
+    let expected = Vec3::new(0.5f32.ln(), 0.25f32.ln(), 0.0) / -2.0;
+    let got = desc.materials[glass].absorption;
+    assert!((got - expected).abs().max_element() < 1e-6, "{got}");
+    // Thickness zero is thin-walled: no volume.
+    v["materials"][glass]["extensions"] = volume(0.0);
+    let thin = load_description(&write_json(&dir, "thin.gltf", &v)).unwrap();
+    assert_eq!(thin.materials[glass].absorption, Vec3::ZERO);
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -146,6 +146,31 @@ fn photon_mappers_agree_with_the_path_tracer_on_cornell_glass() {
     }
 }
 
+#[test]
+fn photons_through_absorbing_glass_agree_with_the_path_tracer() {
+    // Cornell-glass with a sphere that absorbs (KHR_materials_volume): the caustic and the
+    // sphere's image are tinted by Beer-Lambert transmittance, which the photon pass must
+    // apply as the camera paths do.
+    use caustica_renderer::procedural::cornell_box;
+    let mut desc = cornell_box(true);
+    let glass = desc
+        .materials
+        .iter()
+        .position(|m| m.name == "glass")
+        .unwrap();
+    desc.materials[glass].absorption = glam::Vec3::new(2.0, 0.7, 0.1);
+    let size = 48;
+    let (reference, _) = render(desc.clone(), "pt", &[], 1024, size);
+    let (clear, _) = render(cornell_box(true), "pt", &[], 256, size);
+    let all: Vec<usize> = (0..reference.pixels.len()).collect();
+    let reference_mean = mean_luminance_of(&reference, &all);
+    // The absorption is visible in the image at all.
+    assert!(reference_mean < 0.99 * mean_luminance_of(&clear, &all));
+    let (sppm, _) = render(desc, "sppm", &[("photons", 2e3)], 1024, size);
+    let ratio = mean_luminance_of(&sppm, &all) / reference_mean;
+    assert!((ratio - 1.0).abs() < 0.01, "mean luminance ratio {ratio}");
+}
+
 /// A million passes of one photon on a one-pixel image: the radius keeps its floor, counts
 /// stay exact (u64), the statistics and the radius history stay bounded, the image finite.
 #[test]

@@ -102,6 +102,7 @@ pub fn li(
             }
             break;
         };
+        beta *= si.transmittance;
         if let Some((light, area)) = scene.area_light(&si) {
             let le = area.l(&scene.textures, &si.uv, si.wo);
             if le != Vec3::ZERO {

@@ -158,6 +158,9 @@ pub struct Material {
     pub emissive_texture: Option<TextureRef>,
     pub normal_texture: Option<(TextureRef, f32)>,
     pub double_sided: bool,
+    /// Absorption coefficient (per scene unit) inside a closed mesh of this material
+    /// (KHR_materials_volume); zero outside the extension.
+    pub absorption: Vec3,
     /// baseColorFactor's alpha (times the base colour texture's alpha where there is one).
     pub alpha: f32,
     pub alpha_mode: AlphaMode,
@@ -190,6 +193,7 @@ impl Default for Material {
             emissive_texture: None,
             normal_texture: None,
             double_sided: false,
+            absorption: Vec3::ZERO,
             alpha: 1.0,
             alpha_mode: AlphaMode::Opaque,
         }

@@ -124,6 +124,10 @@ pub struct SurfaceInteraction {
     pub uv: TexCoords,
     /// The interpolated vertex colour (COLOR_0), white where the mesh has none.
     pub vertex_color: Vec4,
+    /// Beer-Lambert transmittance of the segment that led here, when it ran inside an
+    /// absorbing medium (it met this surface from the back); one otherwise. Every estimator
+    /// multiplies its throughput by it.
+    pub transmittance: Vec3,
     pub wo: Vec3,
     pub triangle: u32,
 }
@@ -303,6 +307,7 @@ impl Scene {
             shading,
             uv,
             vertex_color: self.vertex_color(t, hit.b),
+            transmittance: transmittance(material.absorption, ray, hit.t, n),
             wo: -ray.d,
             triangle: hit.triangle,
         })
@@ -404,4 +409,13 @@ fn coverage_hash(ray: &Ray, triangle: u32) -> f32 {
     }
     h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     ((h ^ (h >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// exp(-sigma_a d) over the segment of length `t |d|` that met a surface of normal `n` from
+/// its back, i.e. from inside a closed mesh with outward normals (KHR_materials_volume).
+fn transmittance(absorption: Vec3, ray: &Ray, t: f32, n: Vec3) -> Vec3 {
+    if absorption == Vec3::ZERO || ray.d.dot(n) <= 0.0 {
+        return Vec3::ONE;
+    }
+    (-absorption * (t * ray.d.length())).exp()
 }

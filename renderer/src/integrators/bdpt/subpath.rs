@@ -122,6 +122,7 @@ impl<S: SampleSource> Walker<'_, S> {
                 }
                 return;
             };
+            beta *= si.transmittance;
             let bsdf = scene.bsdf(&si);
             let mut vertex = Vertex::surface(si, bsdf, beta);
             let prev = path.last().expect("a subpath starts with its endpoint");

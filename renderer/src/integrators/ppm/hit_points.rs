@@ -69,6 +69,7 @@ pub fn trace_eye_path(
             emitted += beta * scene.environment_radiance();
             break;
         };
+        beta *= si.transmittance;
         emitted += beta * scene.emitted(&si, si.wo);
         let bsdf = scene.bsdf(&si);
         let wo = si.shading.to_local(si.wo);

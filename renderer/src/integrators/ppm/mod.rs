@@ -471,6 +471,7 @@ impl PhotonMapper {
             let Some(si) = scene.intersect(&ray) else {
                 break;
             };
+            flux *= si.transmittance;
             let bsdf = scene.bsdf(&si);
             // Direct light is next-event estimation's: photons count from their second hit on.
             if depth > 0 && !bsdf.is_delta() {
