@@ -146,11 +146,12 @@ fn what_to_do(ext: &str) -> &'static str {
 /// the JSON is read as a value first and the empty array supplied.
 fn parse(bytes: &[u8]) -> Result<(gltf::json::Root, Option<Vec<u8>>), SceneError> {
     let invalid = |e: &dyn std::fmt::Display| err(format!("not a valid glTF file: {e}"));
+    // The JSON is read where it lies (a .gltf with embedded buffers can be tens of MB).
     let (json, blob) = if bytes.starts_with(b"glTF") {
         let glb = gltf::Glb::from_slice(bytes).map_err(|e| invalid(&e))?;
-        (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
+        (glb.json, glb.bin.map(|b| b.into_owned()))
     } else {
-        (bytes.to_vec(), None)
+        (std::borrow::Cow::Borrowed(bytes), None)
     };
     let mut value: serde_json::Value = serde_json::from_slice(&json).map_err(|e| invalid(&e))?;
     if let Some(scenes) = value.get_mut("scenes").and_then(|s| s.as_array_mut()) {
