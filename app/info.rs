@@ -75,7 +75,7 @@ pub fn run(args: &InfoArgs) -> Result<(), crate::render::Failure> {
         command += &format!(" --{} {}", k.replace('_', "-"), format_value(*v));
     }
     println!("  {command}");
-    let reference = s.reference(width, height, scene.camera.yfov);
+    let reference = s.reference(width, height, &scene.camera);
     println!(
         "a reference image (caustica reference) renders with {}",
         reference.integrator

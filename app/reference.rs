@@ -49,7 +49,7 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
     let scene = gltf::load(&args.scene).map_err(|e| anyhow!(e))?;
     let (width, height) = args.size.resolve(scene.camera.aspect);
     let survey = transport::survey_at(&scene, width, height);
-    let r = survey.reference(width, height, scene.camera.yfov);
+    let r = survey.reference(width, height, &scene.camera);
     eprintln!("reference with {}: {}", r.integrator, r.reasons.join("; "));
     let render = RenderArgs {
         scene: args.scene.clone(),

@@ -11,7 +11,7 @@
 //! photon-mapping, bidirectional and MMLT throughput on cornell-glass and door. Throughput is
 //! reported as elements (rays, samples, photons or mutations) per second.
 
-use caustica_renderer::camera::PerspectiveCamera;
+use caustica_renderer::camera::Camera;
 use caustica_renderer::geometry::Ray;
 use caustica_renderer::integrators::path_tracer::{PathSettings, PathTracer};
 use caustica_renderer::integrators::{Integrator, RenderContext};
@@ -48,7 +48,7 @@ fn million_triangle_pool() -> Arc<Scene> {
 }
 
 fn camera_rays(scene: &Scene) -> Vec<Ray> {
-    let camera = PerspectiveCamera::new(&scene.camera, SIZE, SIZE);
+    let camera = Camera::new(&scene.camera, SIZE, SIZE);
     let mut s = Sampler::new(1);
     (0..SIZE * SIZE)
         .map(|i| {
@@ -172,7 +172,7 @@ fn bench_path_tracer(c: &mut Criterion) {
             || {
                 let ctx = RenderContext {
                     scene: scene.clone(),
-                    camera: PerspectiveCamera::new(&scene.camera, size, size),
+                    camera: Camera::new(&scene.camera, size, size),
                     seed: 0,
                 };
                 Box::new(PathTracer::new(ctx, PathSettings::default()))
@@ -246,7 +246,7 @@ fn bench_photon_mapping(c: &mut Criterion) {
     bench_passes(c, "sppm photons", settings.photons, || {
         let ctx = RenderContext {
             scene: scene.clone(),
-            camera: PerspectiveCamera::new(&scene.camera, SIZE, SIZE),
+            camera: Camera::new(&scene.camera, SIZE, SIZE),
             seed: 0,
         };
         Box::new(PhotonMapper::new(ctx, Variant::Sppm, settings))
@@ -265,7 +265,7 @@ fn bench_bidirectional(c: &mut Criterion) {
     let door = bundled("door");
     let ctx = |scene: &Arc<Scene>| RenderContext {
         scene: scene.clone(),
-        camera: PerspectiveCamera::new(&scene.camera, size, size),
+        camera: Camera::new(&scene.camera, size, size),
         seed: 0,
     };
     bench_passes(c, "bdpt samples", (size * size) as u64, || {

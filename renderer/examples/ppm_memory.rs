@@ -5,7 +5,7 @@
 //! cargo run --release -p caustica-renderer --example ppm_memory
 //! ```
 
-use caustica_renderer::camera::PerspectiveCamera;
+use caustica_renderer::camera::Camera;
 use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
 use caustica_renderer::integrators::{Integrator, RenderContext};
 use caustica_renderer::scene::gltf::load;
@@ -31,7 +31,7 @@ fn main() {
     for variant in [Variant::Ppm, Variant::Sppm, Variant::Pppm] {
         let ctx = RenderContext {
             scene: scene.clone(),
-            camera: PerspectiveCamera::new(&scene.camera, 256, 256),
+            camera: Camera::new(&scene.camera, 256, 256),
             seed: 0,
         };
         let settings = PhotonMappingSettings {

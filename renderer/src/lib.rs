@@ -7,7 +7,7 @@
 //!   [`scene::SceneDescription`] in code) and shared by all threads through an `Arc`. It owns
 //!   the triangles, [`material::Material`]s, [`light::Light`]s, the camera description and the
 //!   BVH ([`scene::accel`]).
-//! - A [`camera::PerspectiveCamera`] turns film positions into rays.
+//! - A [`camera::Camera`] turns film positions into rays.
 //! - Every random number comes from a [`sampling::sampler::Sampler`] keyed by (seed, pixel,
 //!   sample index, dimension), so images do not depend on thread scheduling.
 //! - An [`integrators::Integrator`] runs one progressive pass at a time, taking work from the

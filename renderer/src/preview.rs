@@ -7,7 +7,7 @@
 //! view does. It is no estimate of the image: the frame that carries it says so
 //! (`Frame::preview`), and measurements skip it (its pass count is 0).
 
-use crate::camera::{CameraDesc, PerspectiveCamera};
+use crate::camera::{Camera, CameraDesc};
 use crate::image::Image;
 use crate::integrators::path_tracer::{PathSettings, PathTracer};
 use crate::integrators::{Cancelled, Integrator, RenderContext};
@@ -31,7 +31,7 @@ pub fn render(ctx: &RenderContext, cancel: &AtomicBool) -> Result<Image, Cancell
         ..ctx.scene.camera
     };
     let coarse_ctx = RenderContext {
-        camera: PerspectiveCamera::new(&desc, pw, ph),
+        camera: Camera::new(&desc, pw, ph),
         ..ctx.clone()
     };
     let settings = PathSettings {

@@ -150,11 +150,10 @@ pub fn cuboid(name: &str, xf: Affine3A, material: u32) -> MeshDesc {
 
 pub fn camera_looking(from: Vec3, to: Vec3, yfov_degrees: f32) -> CameraDesc {
     let rotation = Quat::from_rotation_arc(Vec3::NEG_Z, (to - from).normalize());
-    CameraDesc {
-        camera_to_world: Affine3A::from_rotation_translation(rotation, from),
-        yfov: yfov_degrees.to_radians(),
-        aspect: None,
-    }
+    CameraDesc::perspective(
+        Affine3A::from_rotation_translation(rotation, from),
+        yfov_degrees.to_radians(),
+    )
 }
 
 /// The unit sphere about the origin, facing inward, with material 0: the enclosure of the

@@ -4,7 +4,7 @@
 //! waiting on any lock the workers hold, and frames are never queued: the newest wins.
 //! Cancellation is checked per image row, so it takes effect within a fraction of a pass.
 
-use crate::camera::PerspectiveCamera;
+use crate::camera::Camera;
 use crate::error_estimate::ErrorEstimate;
 use crate::image::Image;
 use crate::integrators::{
@@ -187,7 +187,7 @@ impl Session {
             })
             .build()
             .map_err(|e| SessionError::Threads(e.to_string()))?;
-        let camera = PerspectiveCamera::new(&config.scene.camera, w, h);
+        let camera = Camera::new(&config.scene.camera, w, h);
         let ctx = RenderContext {
             scene: config.scene.clone(),
             camera,

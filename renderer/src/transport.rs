@@ -19,7 +19,7 @@
 //! the light is shaped; where the camera sees little direct light, bidirectional methods do;
 //! otherwise the path tracer, simplest and unbiased, is hard to beat.
 
-use crate::camera::PerspectiveCamera;
+use crate::camera::{Camera, CameraDesc};
 use crate::integrators::ParamValues;
 use crate::integrators::path_tracer::sample_direct;
 use crate::integrators::scatter;
@@ -81,7 +81,7 @@ fn is_glossy(bsdf: &Bsdf) -> bool {
 /// paths; deterministic for a given seed.
 pub fn survey(
     scene: &Scene,
-    camera: &PerspectiveCamera,
+    camera: &Camera,
     camera_paths: usize,
     light_paths: usize,
     seed: u64,
@@ -155,12 +155,7 @@ pub fn survey(
 /// The camera half of the survey: `paths` camera paths on a jittered grid over the image,
 /// followed through specular bounces to their first non-specular vertex (or given up after
 /// `MAX_SPECULAR_DEPTH`); fills the view's shares and the median hit distance.
-pub fn survey_view(
-    scene: &Scene,
-    camera: &PerspectiveCamera,
-    paths: usize,
-    seed: u64,
-) -> TransportSurvey {
+pub fn survey_view(scene: &Scene, camera: &Camera, paths: usize, seed: u64) -> TransportSurvey {
     let mut s = TransportSurvey {
         camera_paths: paths,
         ..Default::default()
@@ -219,13 +214,13 @@ pub fn survey_view(
 /// The survey at an output size (4096 camera paths, 8192 light paths) and what follows from it.
 pub fn analyse(scene: &Scene, width: u32, height: u32) -> (TransportSurvey, Recommendation) {
     let s = survey_at(scene, width, height);
-    let r = s.recommend(width, height, scene.camera.yfov);
+    let r = s.recommend(width, height, &scene.camera);
     (s, r)
 }
 
 /// The standard survey (4096 camera paths, 8192 light paths) for a `width` x `height` image.
 pub fn survey_at(scene: &Scene, width: u32, height: u32) -> TransportSurvey {
-    let camera = PerspectiveCamera::new(&scene.camera, width, height);
+    let camera = Camera::new(&scene.camera, width, height);
     survey(scene, &camera, 4096, 8192, 1)
 }
 
@@ -240,7 +235,7 @@ const HIDDEN_LIGHTS: f64 = 0.05;
 
 impl TransportSurvey {
     /// The integrator this scene needs at `width` x `height`, its parameters and the reasons.
-    pub fn recommend(&self, width: u32, height: u32, yfov: f32) -> Recommendation {
+    pub fn recommend(&self, width: u32, height: u32, camera: &CameraDesc) -> Recommendation {
         let mut reasons = Vec::new();
         let mut cannot = Vec::new();
         let pct = |x: f64| format!("{:.0} %", 100.0 * x);
@@ -305,7 +300,7 @@ impl TransportSurvey {
         if integrator == "sppm" {
             params.insert(
                 "radius".into(),
-                pixel_footprint_radius(self.median_hit_distance, height, yfov),
+                pixel_footprint_radius(self.median_hit_distance, height, camera),
             );
             params.insert("photons".into(), photons_per_pass(width, height) as f64);
         }
@@ -324,8 +319,8 @@ impl TransportSurvey {
     /// reference does not find its own kernel bias in it, unless caustics carry so much of the
     /// light (over 20 %) that an unbiased estimator's noise after a long run would still
     /// exceed the photon mapper's bias.
-    pub fn reference(&self, width: u32, height: u32, yfov: f32) -> Recommendation {
-        let mut r = self.recommend(width, height, yfov);
+    pub fn reference(&self, width: u32, height: u32, camera: &CameraDesc) -> Recommendation {
+        let mut r = self.recommend(width, height, camera);
         let unbiased_possible = r.cannot_converge.iter().all(|(name, _)| *name == "pt");
         if r.integrator == "mmlt" {
             // Metropolis chains' error estimate rests on a few independent groups and can miss
@@ -350,9 +345,8 @@ impl TransportSurvey {
 
 /// The initial gather radius: four pixel footprints at the median distance the camera sees
 /// surfaces at (a pixel there is 2 d tan(fov / 2) / height wide), through specular chains.
-pub fn pixel_footprint_radius(distance: f64, height: u32, yfov: f32) -> f64 {
-    let pixel = 2.0 * distance.max(1e-6) * (yfov as f64 / 2.0).tan() / height.max(1) as f64;
-    4.0 * pixel
+pub fn pixel_footprint_radius(distance: f64, height: u32, camera: &CameraDesc) -> f64 {
+    4.0 * camera.pixel_size(distance, height)
 }
 
 /// Photons per pass: one per pixel, so that the photon pass and the eye pass cost about the
@@ -367,9 +361,13 @@ mod tests {
     use crate::procedural::{caustic_pool, cornell_box, door};
     use glam::Vec3;
 
+    fn lens() -> CameraDesc {
+        CameraDesc::perspective(glam::Affine3A::IDENTITY, 0.7)
+    }
+
     fn survey_of(desc: crate::scene::SceneDescription) -> TransportSurvey {
         let scene = Scene::build(desc).unwrap();
-        let camera = PerspectiveCamera::new(&scene.camera, 64, 64);
+        let camera = Camera::new(&scene.camera, 64, 64);
         survey(&scene, &camera, 4096, 8192, 1)
     }
 
@@ -384,18 +382,18 @@ mod tests {
         assert_eq!(plain.caustic_flux, 0.0, "{plain:?}");
         assert_eq!(plain.seen_through_specular, 0.0);
         assert!(plain.directly_lit > 0.5, "{plain:?}");
-        assert_eq!(plain.recommend(64, 64, 0.7).integrator, "pt");
+        assert_eq!(plain.recommend(64, 64, &lens()).integrator, "pt");
         let pool = survey_of(caustic_pool());
         assert!(pool.caustic_flux > 0.3, "{pool:?}");
-        assert_eq!(pool.recommend(64, 64, 0.7).integrator, "sppm");
-        assert_eq!(pool.reference(64, 64, 0.7).integrator, "sppm");
-        assert_eq!(glass.recommend(64, 64, 0.7).integrator, "sppm");
-        assert_eq!(glass.reference(64, 64, 0.7).integrator, "bdpt");
+        assert_eq!(pool.recommend(64, 64, &lens()).integrator, "sppm");
+        assert_eq!(pool.reference(64, 64, &lens()).integrator, "sppm");
+        assert_eq!(glass.recommend(64, 64, &lens()).integrator, "sppm");
+        assert_eq!(glass.reference(64, 64, &lens()).integrator, "bdpt");
         let door = survey_of(door());
         assert!(door.directly_lit < 0.2, "{door:?}");
         assert!(door.directly_lit < HIDDEN_LIGHTS, "{door:?}");
-        assert_eq!(door.recommend(64, 64, 0.7).integrator, "mmlt");
-        assert_eq!(door.reference(64, 64, 0.7).integrator, "bdpt");
+        assert_eq!(door.recommend(64, 64, &lens()).integrator, "mmlt");
+        assert_eq!(door.reference(64, 64, &lens()).integrator, "bdpt");
     }
 
     #[test]
@@ -419,7 +417,7 @@ mod tests {
             s.delta_light_power > 0.99 && s.delta_caustic_flux > 0.3,
             "{s:?}"
         );
-        let r = s.recommend(64, 64, 0.7);
+        let r = s.recommend(64, 64, &lens());
         assert_eq!(r.integrator, "sppm");
         let ruled_out: Vec<&str> = r.cannot_converge.iter().map(|c| c.0).collect();
         assert_eq!(ruled_out, ["pt", "bdpt", "mmlt"]);

@@ -8,7 +8,7 @@ use caustica_renderer::session::{Session, SessionConfig};
 use std::sync::Arc;
 
 mod common;
-use common::{mean, render};
+use common::{mean, render, with_orthographic_camera};
 
 /// The mean over the image after each of `passes` passes of `integrator`, and the standard
 /// error of their average, from the spread of the per-pass means.
@@ -37,15 +37,22 @@ fn mean_and_standard_error(
 /// path, so for bounces 1 to 3 the image mean of each (s, t) must match next-event
 /// estimation's (s = 1) within four combined standard errors (estimated from the spread of
 /// per-pass means). This is how an error in one strategy's contribution shows; the weighted
-/// sum is tested against the path tracer below.
+/// sum is tested against the path tracer below. Through the orthographic camera the light
+/// tracing strategies (t = 1) connect along its single direction, the adjoint of a
+/// directional light, and the camera's first hit has density cos / A.
 #[test]
 fn each_strategy_alone_converges_to_the_same_image() {
-    use caustica_renderer::camera::PerspectiveCamera;
+    assert_strategies_agree(cornell_box(false), 3);
+    assert_strategies_agree(with_orthographic_camera(cornell_box(false), 0.9), 2);
+}
+
+fn assert_strategies_agree(desc: SceneDescription, max_depth: usize) {
+    use caustica_renderer::camera::Camera;
     use caustica_renderer::integrators::RenderContext;
     use caustica_renderer::integrators::bdpt::{Bdpt, BdptSettings};
-    let scene = Arc::new(Scene::build(cornell_box(false)).unwrap());
-    let camera = PerspectiveCamera::new(&scene.camera, 16, 16);
-    for depth in 1..=3usize {
+    let scene = Arc::new(Scene::build(desc).unwrap());
+    let camera = Camera::new(&scene.camera, 16, 16);
+    for depth in 1..=max_depth {
         let mut results = Vec::new();
         for s in 0..=depth + 2 {
             let t = depth + 2 - s;
@@ -86,6 +93,10 @@ fn bdpt_reproduces_the_closed_forms() {
     for (name, desc) in [
         ("point-lit sphere", sphere_with_point_light(64)),
         ("emissive sphere", emissive_sphere(0.2, 0.8, 64)),
+        (
+            "point-lit sphere, orthographic camera",
+            with_orthographic_camera(sphere_with_point_light(64), 0.5),
+        ),
     ] {
         let (img, dropped) = render(desc, "bdpt", &[], 64, 24, 1, 0);
         assert_eq!(dropped, 0);
@@ -105,11 +116,11 @@ fn block_means(
     seed: u64,
     params: &[(&str, f64)],
 ) -> Vec<(f64, f64)> {
-    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::camera::Camera;
     use caustica_renderer::integrators::{RenderContext, find};
     use std::sync::atomic::AtomicBool;
     let scene = Arc::new(Scene::build(desc.clone()).unwrap());
-    let camera = PerspectiveCamera::new(&scene.camera, size, size);
+    let camera = Camera::new(&scene.camera, size, size);
     let mut it = (find(integrator).unwrap().create)(
         RenderContext {
             scene,
@@ -183,6 +194,10 @@ fn bdpt_agrees_with_the_path_tracer_on_the_cornell_boxes() {
     for (name, desc) in [
         ("cornell-box", cornell_box(false)),
         ("cornell-glass", cornell_box(true)),
+        (
+            "cornell-glass, orthographic",
+            with_orthographic_camera(cornell_box(true), 0.9),
+        ),
     ] {
         let (z, ratio) = agreement(&desc, ("pt", 1024), ("bdpt", 1024), 32);
         let chi = z.iter().map(|z| z * z).sum::<f64>() / z.len() as f64;
@@ -218,10 +233,15 @@ fn mmlt_params(extra: &[(&'static str, f64)]) -> Vec<(&'static str, f64)> {
 /// independent sampler) and p_large 0 (valid, but the viewer warns), sigma 1e-5 and 1.
 #[test]
 fn mmlt_reproduces_the_closed_forms_at_every_extreme_of_its_parameters() {
-    let cases: [(&str, SceneDescription, f64); 2] = [
+    let cases: [(&str, SceneDescription, f64); 3] = [
         (
             "point-lit sphere",
             sphere_with_point_light(64),
+            1.0 - 0.5f64.powi(10),
+        ),
+        (
+            "point-lit sphere, orthographic camera",
+            with_orthographic_camera(sphere_with_point_light(64), 0.5),
             1.0 - 0.5f64.powi(10),
         ),
         (
@@ -354,12 +374,12 @@ fn mmlt_agrees_with_the_path_tracer_on_the_cornell_boxes() {
 /// changes are a subset of the proposals.
 #[test]
 fn the_technique_histogram_counts_every_step() {
-    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::camera::Camera;
     use caustica_renderer::integrators::mmlt::{Mmlt, MmltSettings};
     use caustica_renderer::integrators::{Integrator, RenderContext};
     use std::sync::atomic::AtomicBool;
     let scene = Arc::new(Scene::build(cornell_box(true)).unwrap());
-    let camera = PerspectiveCamera::new(&scene.camera, 20, 15);
+    let camera = Camera::new(&scene.camera, 20, 15);
     let settings = MmltSettings {
         bootstrap: 10_000,
         chains: 37,
@@ -406,13 +426,13 @@ fn the_technique_histogram_counts_every_step() {
 /// steps, sigma 1e-4) reaches the pixels around where it started: far fewer (56 % after 16).
 #[test]
 fn mmlt_chains_reach_every_pixel_that_indirect_light_reaches() {
-    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::camera::Camera;
     use caustica_renderer::integrators::mmlt::{Mmlt, MmltSettings};
     use caustica_renderer::integrators::{Integrator, RenderContext};
     use std::sync::atomic::AtomicBool;
     let coverage = |large_step_prob: f64, sigma: f64| {
         let scene = Arc::new(Scene::build(cornell_box(false)).unwrap());
-        let camera = PerspectiveCamera::new(&scene.camera, 32, 32);
+        let camera = Camera::new(&scene.camera, 32, 32);
         let settings = MmltSettings {
             bootstrap: 10_000,
             large_step_prob,
@@ -497,12 +517,12 @@ fn a_scene_whose_light_cannot_reach_the_camera_is_black_with_a_message() {
 /// leaves it: started on a black bootstrap sample, it finds light within a few steps.
 #[test]
 fn a_chain_in_a_zero_state_moves_on() {
-    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::camera::Camera;
     use caustica_renderer::integrators::mmlt::chain::{Chain, ChainOutput};
     use caustica_renderer::integrators::mmlt::histogram::TechniqueHistogram;
     use caustica_renderer::integrators::mmlt::path_sample::Subpaths;
     let scene = Scene::build(cornell_box(false)).unwrap();
-    let camera = PerspectiveCamera::new(&scene.camera, 16, 16);
+    let camera = Camera::new(&scene.camera, 16, 16);
     let mut scratch = Subpaths::default();
     let mut rays = 0;
     let black = (0..1000u64)
@@ -584,7 +604,7 @@ fn bdpt_and_mmlt_images_do_not_depend_on_the_thread_count() {
 /// the old roulette, 2.6); we allow 1.1.
 #[test]
 fn where_only_s0_samples_the_light_bdpt_is_no_noisier_per_sample_than_pt() {
-    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::camera::Camera;
     use caustica_renderer::integrators::{Integrator, ParamValues, RenderContext, registry};
     use caustica_renderer::procedural::{camera_looking, caustic_pool, horizontal_quad};
     use glam::{Vec2, Vec3};
@@ -600,7 +620,7 @@ fn where_only_s0_samples_the_light_bdpt_is_no_noisier_per_sample_than_pt() {
         30.0,
     ));
     let scene = Arc::new(Scene::build(desc).unwrap());
-    let camera = PerspectiveCamera::new(&scene.camera, 32, 32);
+    let camera = Camera::new(&scene.camera, 32, 32);
     let cancel = AtomicBool::new(false);
     let estimated_rel_mse = |name: &str, seed: u64| {
         let ctx = RenderContext {

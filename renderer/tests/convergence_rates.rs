@@ -8,7 +8,7 @@
 
 mod common;
 
-use caustica_renderer::camera::PerspectiveCamera;
+use caustica_renderer::camera::Camera;
 use caustica_renderer::integrators::{self, ParamValues, RenderContext};
 use caustica_renderer::procedural::sphere_with_point_light;
 use caustica_renderer::scene::Scene;
@@ -29,7 +29,7 @@ fn rel_mse_at(
     let params = integrators::resolve_params(info, &given).unwrap();
     let ctx = RenderContext {
         scene: scene.clone(),
-        camera: PerspectiveCamera::new(&scene.camera, 24, 24),
+        camera: Camera::new(&scene.camera, 24, 24),
         seed,
     };
     let mut renderer = (info.create)(ctx, &params);
@@ -109,12 +109,12 @@ fn unbiased_estimators_converge_like_one_over_n() {
 #[test]
 fn mean_squared_error_falls_like_n_to_the_minus_alpha_and_radius_squared_like_n_to_alpha_minus_one()
 {
-    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::camera::Camera;
     use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
     use caustica_renderer::integrators::{Integrator, RenderContext};
     use std::sync::atomic::AtomicBool;
     let scene = Arc::new(Scene::build(sphere_with_point_light(128)).unwrap());
-    let camera = PerspectiveCamera::new(&scene.camera, 24, 24);
+    let camera = Camera::new(&scene.camera, 24, 24);
     let cancel = AtomicBool::new(false);
     let checkpoints = [8u64, 16, 32, 64, 128, 256];
     for variant in [Variant::Sppm, Variant::Pppm, Variant::Ppm] {

@@ -18,7 +18,7 @@
 
 mod common;
 
-use caustica_renderer::camera::PerspectiveCamera;
+use caustica_renderer::camera::Camera;
 use caustica_renderer::image::{Image, compare, read_exr};
 use caustica_renderer::integrators::{self, ParamValues, RenderContext};
 use caustica_renderer::procedural::sphere_with_point_light;
@@ -64,7 +64,7 @@ fn track(
     let info = integrators::find(integrator).unwrap();
     let given: ParamValues = params.iter().map(|(k, v)| (k.to_string(), *v)).collect();
     let params = integrators::resolve_params(info, &given).unwrap();
-    let camera = PerspectiveCamera::new(
+    let camera = Camera::new(
         &scene.camera,
         reference.width as u32,
         reference.height as u32,
@@ -162,7 +162,7 @@ fn reference_by(
     let params = integrators::resolve_params(info, &given).unwrap();
     let ctx = RenderContext {
         scene: scene.clone(),
-        camera: PerspectiveCamera::new(&scene.camera, size.0, size.1),
+        camera: Camera::new(&scene.camera, size.0, size.1),
         seed: 0xfeed,
     };
     let mut renderer = (info.create)(ctx, &params);
@@ -244,7 +244,7 @@ fn on_the_uniform_closed_form_every_estimate_tracks_the_true_error() {
 fn on_the_mirrored_light_the_photon_mappers_estimate_their_kernel_bias() {
     let setup = MirroredLight::new();
     let scene = scene(setup.desc.clone());
-    let camera = PerspectiveCamera::new(&scene.camera, 16, 16);
+    let camera = Camera::new(&scene.camera, 16, 16);
     let reference = setup.reference_image(&camera, 4);
     let params = [("radius", 2.25), ("photons", 40_000.0), ("max_depth", 2.0)];
     for integrator in ["sppm", "pppm", "ppm"] {

@@ -132,6 +132,50 @@ fn materials_lights_and_camera_follow_the_design() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// An orthographic camera is read with its film size: ymag is half the height, xmag / ymag
+/// the aspect (spec 3.10.3); the export writes it back the same.
+#[test]
+fn orthographic_cameras_are_read_with_their_film_size() {
+    use caustica_renderer::camera::Projection;
+    let dir = temp_dir("orthographic");
+    let mut desc = cornell_box(false);
+    let camera = desc.camera.as_mut().unwrap();
+    camera.projection = Projection::Orthographic { ymag: 0.8 };
+    camera.aspect = Some(1.5);
+    let mut v = to_gltf(&desc);
+    let written = &v["cameras"][0]["orthographic"];
+    assert_eq!(
+        (written["xmag"].as_f64(), written["ymag"].as_f64()),
+        (Some(1.2000000476837158), Some(0.800000011920929))
+    );
+    let scene = load(&write_json(&dir, "ortho.gltf", &v)).unwrap();
+    assert_eq!(
+        scene.camera.projection,
+        Projection::Orthographic { ymag: 0.8 }
+    );
+    assert_eq!(scene.camera.aspect, Some(1.5));
+    assert!(
+        scene.info.warnings.iter().all(|w| !w.contains("camera")),
+        "{:?}",
+        scene.info.warnings
+    );
+    // A film of no size is ignored with a warning (the default camera frames the scene),
+    // not turned into NaN rays.
+    v["cameras"][0]["orthographic"]["ymag"] = json!(0.0);
+    let scene = load(&write_json(&dir, "flat.gltf", &v)).unwrap();
+    assert!(scene.info.default_camera);
+    assert!(
+        scene
+            .info
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("cameras[0]: a film of no size")),
+        "{:?}",
+        scene.info.warnings
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn punctual_lights_transforms_and_mirrored_nodes() {
     let dir = temp_dir("punctual");

@@ -45,6 +45,17 @@ fn every_variant_converges_to_the_closed_forms() {
             "{integrator}, emissive sphere: mean {m}, exact 1"
         );
     }
+    // Through an orthographic camera the image sees a disc of radius 0.5 on the sphere, a
+    // sixteenth of its area (a quarter above): 128 passes keep the standard error at 0.35 %.
+    let desc = common::with_orthographic_camera(sphere_with_point_light(64), 0.5);
+    let params = [("photons", 10_000.0), ("radius", 0.1)];
+    let (img, dropped) = render(desc, "sppm", &params, 128, 24);
+    assert_eq!(dropped, 0);
+    let m = mean(&img);
+    assert!(
+        (m - 1.0).abs() < 0.015,
+        "sppm, point-lit sphere, orthographic camera: mean {m}, exact 1"
+    );
 }
 
 #[test]
@@ -175,12 +186,12 @@ fn photons_through_absorbing_glass_agree_with_the_path_tracer() {
 /// stay exact (u64), the statistics and the radius history stay bounded, the image finite.
 #[test]
 fn a_million_passes_keep_the_radius_floor_and_exact_counts() {
-    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::camera::Camera;
     use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
     use caustica_renderer::integrators::{Integrator, RenderContext};
     use std::sync::atomic::AtomicBool;
     let scene = Arc::new(Scene::build(sphere_with_point_light(16)).unwrap());
-    let camera = PerspectiveCamera::new(&scene.camera, 1, 1);
+    let camera = Camera::new(&scene.camera, 1, 1);
     let settings = PhotonMappingSettings {
         alpha: 0.01,
         radius: 0.5,
@@ -314,12 +325,12 @@ fn photons_behind_a_thin_wall_are_ignored_and_a_lit_plane_is_exact() {
 /// PPPM's hit points move every pass, so theirs is rebuilt every pass.
 #[test]
 fn the_grid_is_rebuilt_only_when_hit_points_or_radii_require_it() {
-    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::camera::Camera;
     use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
     use caustica_renderer::integrators::{Integrator, RenderContext};
     use std::sync::atomic::AtomicBool;
     let scene = Arc::new(Scene::build(sphere_with_point_light(32)).unwrap());
-    let camera = PerspectiveCamera::new(&scene.camera, 16, 16);
+    let camera = Camera::new(&scene.camera, 16, 16);
     let settings = PhotonMappingSettings {
         alpha: 2.0 / 3.0,
         radius: 0.2,
@@ -421,14 +432,14 @@ impl ExpectedEstimate {
 /// deviations of the two logarithms. alpha 1/2, 2/3 and 1 have distinct rates.
 #[test]
 fn the_kernel_bias_matches_its_expectation_and_falls_like_n_to_the_alpha_minus_one() {
-    use caustica_renderer::camera::PerspectiveCamera;
+    use caustica_renderer::camera::Camera;
     use caustica_renderer::integrators::ppm::{PhotonMapper, PhotonMappingSettings, Variant};
     use caustica_renderer::integrators::{Integrator, RenderContext};
     use std::f64::consts::PI;
     use std::sync::atomic::AtomicBool;
     let setup = MirroredLight::new();
     let scene = Arc::new(Scene::build(setup.desc.clone()).unwrap());
-    let camera = PerspectiveCamera::new(&scene.camera, 16, 16);
+    let camera = Camera::new(&scene.camera, 16, 16);
     let footprints = setup.pixel_footprints(&camera);
     let pixels = footprints.len() as f64;
     let direct: f64 = footprints

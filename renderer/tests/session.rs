@@ -122,7 +122,7 @@ fn the_scene_is_shared_safely_between_threads() {
     assert_send_sync::<caustica_renderer::session::Frame>();
     // Many threads querying one scene at once see the same answers as one thread.
     let scene = Arc::new(Scene::build(cornell_box(true)).unwrap());
-    let camera = caustica_renderer::camera::PerspectiveCamera::new(&scene.camera, 64, 64);
+    let camera = caustica_renderer::camera::Camera::new(&scene.camera, 64, 64);
     let trace = move |scene: &Scene| -> Vec<Option<(u32, u32)>> {
         (0..64 * 64)
             .map(|i| {

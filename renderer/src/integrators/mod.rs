@@ -21,7 +21,7 @@ pub use params::{
 pub use registry::{IntegratorInfo, find, registry};
 pub(crate) use scatter::scatter;
 
-use crate::camera::PerspectiveCamera;
+use crate::camera::Camera;
 use crate::error_estimate::ErrorEstimate;
 use crate::image::Image;
 use crate::scene::Scene;
@@ -32,7 +32,7 @@ use std::sync::atomic::AtomicBool;
 #[derive(Clone)]
 pub struct RenderContext {
     pub scene: Arc<Scene>,
-    pub camera: PerspectiveCamera,
+    pub camera: Camera,
     pub seed: u64,
 }
 

@@ -4,7 +4,7 @@
 //! reads them, the node graph is walked with a depth limit, and as a last line of defence a
 //! panic inside the gltf crate is caught and reported as an error.
 
-use crate::camera::CameraDesc;
+use crate::camera::{CameraDesc, Projection};
 use crate::material::{AlphaMode, Material, TextureRef};
 use crate::scene::{MeshDesc, PunctualLightDesc, Scene, SceneDescription, SceneError};
 use crate::texture::{Texture, Wrap};
@@ -360,18 +360,31 @@ impl Loader<'_> {
         if let Some(camera) = node.camera()
             && self.desc.camera.is_none()
         {
-            match camera.projection() {
+            let (projection, aspect) = match camera.projection() {
                 gltf::camera::Projection::Perspective(p) => {
-                    self.desc.camera = Some(CameraDesc {
-                        camera_to_world: rigid(world),
-                        yfov: p.yfov(),
-                        aspect: p.aspect_ratio(),
-                    })
+                    (Projection::Perspective { yfov: p.yfov() }, p.aspect_ratio())
                 }
-                gltf::camera::Projection::Orthographic(_) => self.desc.warnings.push(format!(
-                    "camera {}: orthographic cameras are not supported",
+                // xmag and ymag are half the film's width and height (spec 3.10.3).
+                gltf::camera::Projection::Orthographic(o) => (
+                    Projection::Orthographic { ymag: o.ymag() },
+                    Some(o.xmag() / o.ymag()),
+                ),
+            };
+            let film = match projection {
+                Projection::Perspective { yfov } => yfov > 0.0 && yfov < std::f32::consts::PI,
+                Projection::Orthographic { ymag } => ymag > 0.0 && ymag.is_finite(),
+            } && aspect.is_none_or(|a| a > 0.0 && a.is_finite());
+            if film {
+                self.desc.camera = Some(CameraDesc {
+                    camera_to_world: rigid(world),
+                    projection,
+                    aspect,
+                });
+            } else {
+                self.desc.warnings.push(format!(
+                    "cameras[{}]: a film of no size ({projection:?}, aspect {aspect:?}) is ignored",
                     camera.index()
-                )),
+                ));
             }
         }
         if let Some(light) = node.light() {

@@ -2,6 +2,7 @@
 //! base64 data URI): how the bundled assets are generated, and how tests make files to break.
 //! Materials are written with their factors (textures are not exported).
 
+use crate::camera::Projection;
 use crate::scene::{PunctualLightDesc, SceneDescription};
 use base64::Engine;
 use glam::{Quat, Vec3};
@@ -230,11 +231,19 @@ fn gltf_parts(desc: &SceneDescription) -> (Value, Vec<u8>) {
     }
     let mut cameras = Vec::new();
     if let Some(c) = &desc.camera {
-        let mut perspective = json!({"yfov": c.yfov, "znear": 0.01});
-        if let Some(a) = c.aspect {
-            perspective["aspectRatio"] = json!(a);
-        }
-        cameras.push(json!({"type": "perspective", "perspective": perspective}));
+        cameras.push(match c.projection {
+            Projection::Perspective { yfov } => {
+                let mut perspective = json!({"yfov": yfov, "znear": 0.01});
+                if let Some(a) = c.aspect {
+                    perspective["aspectRatio"] = json!(a);
+                }
+                json!({"type": "perspective", "perspective": perspective})
+            }
+            Projection::Orthographic { ymag } => {
+                let xmag = ymag * c.aspect.unwrap_or(1.0);
+                json!({"type": "orthographic", "orthographic": {"xmag": xmag, "ymag": ymag, "znear": 0.0, "zfar": 1e6}})
+            }
+        });
         let (_, rotation, translation) = c.camera_to_world.to_scale_rotation_translation();
         nodes.push(json!({"name": "camera", "camera": 0, "translation": translation.to_array(), "rotation": rotation.to_array()}));
     }

@@ -47,6 +47,15 @@ pub fn mean(img: &Image) -> f64 {
         / img.pixels.len() as f64
 }
 
+/// `desc` seen by an orthographic camera in place of its own: same position and direction, a
+/// film `2 ymag` high.
+pub fn with_orthographic_camera(mut desc: SceneDescription, ymag: f32) -> SceneDescription {
+    use caustica_renderer::camera::Projection;
+    let camera = desc.camera.as_mut().expect("the scene has a camera");
+    camera.projection = Projection::Orthographic { ymag };
+    desc
+}
+
 /// Least-squares slope of log y against log x.
 pub fn log_log_slope(points: &[(f64, f64)]) -> f64 {
     let n = points.len() as f64;
@@ -155,10 +164,7 @@ impl MirroredLight {
     }
 
     /// Where each pixel's centre sees the floor, as an offset from the light's foot.
-    pub fn pixel_footprints(
-        &self,
-        camera: &caustica_renderer::camera::PerspectiveCamera,
-    ) -> Vec<glam::DVec2> {
+    pub fn pixel_footprints(&self, camera: &caustica_renderer::camera::Camera) -> Vec<glam::DVec2> {
         let (w, h) = (camera.width, camera.height);
         (0..w * h)
             .map(|i| {
@@ -175,11 +181,7 @@ impl MirroredLight {
 impl MirroredLight {
     /// The exact image: each pixel's radiance (direct and through the mirror) averaged over
     /// `n` x `n` points of the pixel (the radiance is smooth, so 4 x 4 is exact to 1e-5).
-    pub fn reference_image(
-        &self,
-        camera: &caustica_renderer::camera::PerspectiveCamera,
-        n: u32,
-    ) -> Image {
+    pub fn reference_image(&self, camera: &caustica_renderer::camera::Camera, n: u32) -> Image {
         let (w, h) = (camera.width, camera.height);
         let pixels = (0..w * h)
             .map(|i| {

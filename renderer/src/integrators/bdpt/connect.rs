@@ -4,7 +4,7 @@
 //! fresh point on a light (next-event estimation), t = 1 connects a light vertex to the
 //! pinhole and splats to the pixel it lands in.
 
-use crate::camera::PerspectiveCamera;
+use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::integrators::bdpt::vertex::{Vertex, VertexKind};
 use crate::material::TransportMode;
@@ -25,7 +25,7 @@ pub struct Connection {
 #[allow(clippy::too_many_arguments)]
 pub fn connect(
     scene: &Scene,
-    camera: &PerspectiveCamera,
+    camera: &Camera,
     light_path: &[Vertex],
     camera_path: &[Vertex],
     s: usize,
@@ -178,7 +178,7 @@ fn visible(scene: &Scene, a: &Vertex, b: &Vertex, rays: &mut u64) -> bool {
 /// that would need to hit a delta vertex are skipped.
 fn mis_weight(
     scene: &Scene,
-    camera: &PerspectiveCamera,
+    camera: &Camera,
     light_path: &[Vertex],
     camera_path: &[Vertex],
     sampled: Option<&Vertex>,

@@ -2,7 +2,7 @@
 //! at every vertex the forward density and, once the next direction is sampled, the reverse
 //! density of the vertex before it.
 
-use crate::camera::PerspectiveCamera;
+use crate::camera::Camera;
 use crate::integrators::bdpt::vertex::{Vertex, infinite_light_density};
 use crate::integrators::scatter;
 use crate::light::emission::sample_le;
@@ -35,7 +35,7 @@ impl<S: SampleSource> Walker<'_, S> {
     /// position `film`.
     pub fn camera_subpath(
         &mut self,
-        camera: &PerspectiveCamera,
+        camera: &Camera,
         film: Vec2,
         max_vertices: usize,
         path: &mut Vec<Vertex>,
@@ -46,11 +46,16 @@ impl<S: SampleSource> Walker<'_, S> {
         );
         path.clear();
         let ray = camera.generate_ray(film);
-        // W_e cos / (pdf_pos pdf_dir) = 1 for the pinhole with a uniform film sample.
+        // W_e cos / (pdf_pos pdf_dir) = 1 for either camera with a uniform film sample.
         path.push(Vertex::camera(ray.o, Vec3::ONE));
         let pdf_dir = camera.pdf_we_dir(ray.d);
         let start = (Vec3::ONE, pdf_dir);
         self.random_walk(ray, start, max_vertices, TransportMode::Radiance, path);
+        // The orthographic camera's first hit has an area density without distance falloff,
+        // which the walk's solid-angle conversion cannot express.
+        if camera.is_orthographic() && path.len() > 1 {
+            path[1].pdf_fwd = path[0].pdf(self.scene, camera, None, &path[1]);
+        }
     }
 
     /// A light subpath of at most `max_vertices` vertices from a light chosen by power.

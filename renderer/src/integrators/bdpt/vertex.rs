@@ -3,7 +3,7 @@
 //! (`pdf_fwd`, along the subpath's own direction) and backwards (`pdf_rev`, as the other
 //! subpath would), which is all Veach's MIS weights need (Veach 1997, section 10.2).
 
-use crate::camera::PerspectiveCamera;
+use crate::camera::Camera;
 use crate::geometry::offset_ray_origin;
 use crate::light::Light;
 use crate::light::emission::pdf_le;
@@ -192,13 +192,7 @@ impl Vertex {
 
     /// Area density at `next` of continuing a subpath from this vertex, having arrived from
     /// `prev` (pbrt-v3 `Vertex::Pdf`).
-    pub fn pdf(
-        &self,
-        scene: &Scene,
-        camera: &PerspectiveCamera,
-        prev: Option<&Vertex>,
-        next: &Vertex,
-    ) -> f32 {
+    pub fn pdf(&self, scene: &Scene, camera: &Camera, prev: Option<&Vertex>, next: &Vertex) -> f32 {
         if self.kind == VertexKind::Light {
             return self.pdf_light(scene, next);
         }
@@ -207,7 +201,11 @@ impl Vertex {
             return 0.0;
         }
         let pdf = match self.kind {
-            VertexKind::Camera => camera.pdf_we_dir(wn),
+            VertexKind::Camera if next.is_infinite_light(scene) => return camera.pdf_we_dir(wn),
+            VertexKind::Camera => {
+                let n = next.is_on_surface().then_some(next.ng);
+                return camera.pdf_first_hit(self.p, next.p, n);
+            }
             _ => {
                 let (Some(si), Some(bsdf), Some(prev)) = (&self.si, &self.bsdf, prev) else {
                     return 0.0;

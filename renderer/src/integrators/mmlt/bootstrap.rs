@@ -3,7 +3,7 @@
 //! target value, and chains start from bootstrap samples drawn in proportion to their
 //! luminance, so they spread over path lengths as the image's energy does (`seeding`).
 
-use crate::camera::PerspectiveCamera;
+use crate::camera::Camera;
 use crate::integrators::Cancelled;
 use crate::integrators::mmlt::FIRST_CHAIN_LENGTH;
 use crate::integrators::mmlt::path_sample::{Subpaths, evaluate, slot_count, slot_lengths};
@@ -51,7 +51,7 @@ pub struct Evaluation {
 /// Evaluates bootstrap samples `samples` (every path length of each), in key order.
 pub fn evaluate_samples(
     scene: &Scene,
-    camera: &PerspectiveCamera,
+    camera: &Camera,
     seed: u64,
     samples: std::ops::Range<usize>,
     max_depth: usize,

@@ -4,7 +4,7 @@
 //! states (Veach 1997, section 11.5): the proposal with a L / Y, the current state with
 //! (1 - a) L / Y.
 
-use crate::camera::PerspectiveCamera;
+use crate::camera::Camera;
 use crate::integrators::Cancelled;
 use crate::integrators::mmlt::histogram::TechniqueHistogram;
 use crate::integrators::mmlt::path_sample::{PathSample, Subpaths, evaluate, slot_lengths};
@@ -39,7 +39,7 @@ pub struct ChainOutput {
     pub dropped: u64,
 }
 
-fn pixel_of(camera: &PerspectiveCamera, raster: Vec2) -> usize {
+fn pixel_of(camera: &Camera, raster: Vec2) -> usize {
     let (w, h) = (camera.width as usize, camera.height as usize);
     let x = (raster.x.max(0.0) as usize).min(w - 1);
     let y = (raster.y.max(0.0) as usize).min(h - 1);
@@ -59,7 +59,7 @@ impl Chain {
     #[allow(clippy::too_many_arguments)]
     pub fn start(
         scene: &Scene,
-        camera: &PerspectiveCamera,
+        camera: &Camera,
         seed: u64,
         bootstrap_key: u64,
         chain_key: u64,
@@ -92,7 +92,7 @@ impl Chain {
     pub fn run(
         &mut self,
         scene: &Scene,
-        camera: &PerspectiveCamera,
+        camera: &Camera,
         steps: u64,
         large_step_prob: f32,
         sigma: f32,

@@ -19,7 +19,7 @@
 //! moves between techniques, and spends its steps on each in proportion to its share of the
 //! light.
 
-use crate::camera::PerspectiveCamera;
+use crate::camera::Camera;
 use crate::geometry::luminance;
 use crate::integrators::bdpt::connect::connect;
 use crate::integrators::bdpt::subpath::{Termination, Walker};
@@ -128,7 +128,7 @@ pub struct Subpaths {
 /// Evaluates the state of `sampler` as a path of one of `choice`'s lengths.
 pub fn evaluate(
     scene: &Scene,
-    camera: &PerspectiveCamera,
+    camera: &Camera,
     sampler: &mut PssSampler,
     choice: &TechniqueChoice,
     scratch: &mut Subpaths,
