@@ -284,3 +284,45 @@ fn uniform_environment_on_diffuse_and_glossy_planes() {
         sum / n as f64,
     );
 }
+
+/// KHR_materials_clearcoat and KHR_materials_specular under the environment of radiance 1: a
+/// plane of clearcoat c over a base that reflects nothing (black, specular 0) reflects the
+/// coat lobe's albedo c E(mu_o) at f0 = 0.04; a black plastic whose specular layer has
+/// specularFactor s and specularColorFactor k reflects that layer's albedo E(mu_o) at
+/// f0 = min(0.04 k, 1) s, f90 = s (the red channel here). E comes from the layering tables,
+/// which a unit test checks against their quadrature.
+#[test]
+fn uniform_environment_on_coated_and_specular_planes() {
+    use caustica_renderer::material::layering::specular_albedo;
+    let mu_o = EYE.normalize().y;
+    let coat = Material {
+        base_color: Vec3::ZERO,
+        metallic: 0.0,
+        roughness: 0.5,
+        specular: 0.0,
+        clearcoat: 0.8,
+        clearcoat_roughness: 0.3,
+        ..Default::default()
+    };
+    let exact = 0.8 * specular_albedo(mu_o, 0.09, Vec3::splat(0.04), 1.0).x;
+    assert_close(
+        "environment, clearcoat",
+        render_mean(plane_scene(coat), 64),
+        exact as f64,
+    );
+    let tinted = Material {
+        base_color: Vec3::ZERO,
+        metallic: 0.0,
+        roughness: 0.4,
+        specular: 0.7,
+        specular_color: Vec3::new(10.0, 2.0, 1.0),
+        ..Default::default()
+    };
+    let f0 = (0.04 * tinted.specular_color).min(Vec3::ONE) * 0.7;
+    let exact = specular_albedo(mu_o, 0.16, f0, 0.7).x;
+    assert_close(
+        "environment, tinted specular",
+        render_mean(plane_scene(tinted), 64),
+        exact as f64,
+    );
+}

@@ -8,7 +8,7 @@ use caustica_renderer::procedural::{cornell_box, quad};
 use caustica_renderer::scene::gltf::{load, load_description};
 use caustica_renderer::scene::gltf_export::{to_glb, to_gltf};
 use caustica_renderer::scene::{PunctualLightDesc, SceneDescription};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
@@ -973,5 +973,88 @@ fn volume_attenuation_becomes_an_absorption_coefficient() {
     v["materials"][glass]["extensions"] = volume(0.0);
     let thin = load_description(&write_json(&dir, "thin.gltf", &v)).unwrap();
     assert_eq!(thin.materials[glass].absorption, Vec3::ZERO);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// KHR_materials_specular and KHR_materials_clearcoat are read into the material's layers:
+/// factors, textures with their channel's colour space, texCoord and texture transform (the
+/// clearcoat's from the material's raw JSON, which the gltf crate does not parse); the coat's
+/// normal texture is named in a warning; a bad factor or texture index is an error naming the
+/// JSON path.
+#[test]
+fn specular_and_clearcoat_layers_are_read() {
+    let dir = temp_dir("layers");
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([255, 128, 0, 64]))
+        .save(dir.join("layer.png"))
+        .unwrap();
+    let mut v = to_gltf(&cornell_box(false));
+    v["images"] = json!([{"uri": "layer.png"}]);
+    v["textures"] = json!([{"source": 0}]);
+    v["materials"][0]["extensions"] = json!({
+        "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1.0, 0.5, 0.25],
+            "specularTexture": {"index": 0}, "specularColorTexture": {"index": 0}},
+        "KHR_materials_clearcoat": {"clearcoatFactor": 0.8, "clearcoatRoughnessFactor": 0.3,
+            "clearcoatTexture": {"index": 0, "texCoord": 1,
+                "extensions": {"KHR_texture_transform": {"scale": [2.0, 2.0]}}},
+            "clearcoatRoughnessTexture": {"index": 0},
+            "clearcoatNormalTexture": {"index": 0}}
+    });
+    v["extensionsUsed"] = json!(["KHR_materials_specular", "KHR_materials_clearcoat"]);
+    v["extensionsRequired"] = json!(["KHR_materials_clearcoat"]);
+    let desc = load_description(&write_json(&dir, "layers.gltf", &v)).unwrap();
+    let m = &desc.materials[0];
+    assert_eq!(
+        (m.specular, m.specular_color),
+        (0.5, Vec3::new(1.0, 0.5, 0.25))
+    );
+    assert_eq!((m.clearcoat, m.clearcoat_roughness), (0.8, 0.3));
+    assert_eq!(m.kind(), MaterialKind::MetallicRoughness);
+    let coat = m.clearcoat_texture.expect("the clearcoat texture is read");
+    assert_eq!(coat.tex_coord, 1);
+    assert_eq!(
+        coat.uv(&[Vec2::ZERO, Vec2::new(0.25, 0.5)]),
+        Vec2::new(0.5, 1.0)
+    );
+    // One image, read linear for the clearcoat and specular factors and sRGB for the
+    // specular colour: two textures.
+    let (linear, srgb) = (coat.texture, m.specular_color_texture.unwrap().texture);
+    assert_eq!(m.specular_texture.unwrap().texture, linear);
+    assert_eq!(m.clearcoat_roughness_texture.unwrap().texture, linear);
+    assert_ne!(linear, srgb);
+    assert!(
+        desc.warnings
+            .iter()
+            .any(|w| w.contains("clearcoatNormalTexture ignored")),
+        "{:?}",
+        desc.warnings
+    );
+    // The export writes the factors back.
+    let mut layered = cornell_box(false);
+    layered.materials[0] = Material {
+        specular: 0.25,
+        specular_color: Vec3::new(0.5, 1.0, 2.0),
+        clearcoat: 0.5,
+        clearcoat_roughness: 0.125,
+        ..Material::diffuse(Vec3::ONE)
+    };
+    let back = load_description(&write_json(&dir, "export.gltf", &to_gltf(&layered))).unwrap();
+    let m = &back.materials[0];
+    assert_eq!(
+        (m.specular, m.specular_color),
+        (0.25, Vec3::new(0.5, 1.0, 2.0))
+    );
+    assert_eq!((m.clearcoat, m.clearcoat_roughness), (0.5, 0.125));
+    v["materials"][0]["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"] = json!("x");
+    expect_error(
+        &write_json(&dir, "bad-factor.gltf", &v),
+        "materials[0].extensions.KHR_materials_clearcoat.clearcoatFactor: not a number",
+    );
+    v["materials"][0]["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"] = json!(1.0);
+    v["materials"][0]["extensions"]["KHR_materials_clearcoat"]["clearcoatTexture"] =
+        json!({"index": 7});
+    expect_error(
+        &write_json(&dir, "bad-texture.gltf", &v),
+        "clearcoatTexture: texture 7 does not exist",
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }

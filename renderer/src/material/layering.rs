@@ -117,8 +117,10 @@ fn lerp_index(x: f32, n: usize) -> (usize, usize, f32) {
     (i0, i0 + 1, f - i0 as f32)
 }
 
-/// Directional albedo E(mu) of the specular layer with Schlick reflectance f0.
-pub fn specular_albedo(mu: f32, alpha: f32, f0: f32) -> f32 {
+/// Directional albedo E(mu) of the specular layer with Schlick's reflectance
+/// F = f0 + (f90 - f0) (1 - cos)^5 per channel: E = f0 (A - B) + f90 B (glTF's layer has
+/// f90 = 1; KHR_materials_specular scales it).
+pub fn specular_albedo(mu: f32, alpha: f32, f0: Vec3, f90: f32) -> Vec3 {
     let t = tables();
     let (i0, i1, fi) = lerp_index(mu.abs().sqrt(), N_MU);
     let (j0, j1, fj) = lerp_index(alpha.sqrt(), N_ALPHA);
@@ -127,16 +129,48 @@ pub fn specular_albedo(mu: f32, alpha: f32, f0: f32) -> f32 {
         let r1 = g[j1 * N_MU + i0] * (1.0 - fi) + g[j1 * N_MU + i1] * fi;
         r0 * (1.0 - fj) + r1 * fj
     };
-    (f0 * look(&t.a) + (1.0 - f0) * look(&t.b)).clamp(0.0, 1.0)
+    let (a, b) = (look(t.a), look(t.b));
+    (f0 * (a - b) + Vec3::splat(f90 * b)).clamp(Vec3::ZERO, Vec3::ONE)
 }
 
 /// Cosine-weighted hemispherical average E_avg of the specular layer's albedo.
-pub fn specular_albedo_average(alpha: f32, f0: f32) -> f32 {
+pub fn specular_albedo_average(alpha: f32, f0: Vec3, f90: f32) -> Vec3 {
     let t = tables();
     let (j0, j1, fj) = lerp_index(alpha.sqrt(), N_ALPHA);
     let a = t.a_avg[j0] * (1.0 - fj) + t.a_avg[j1] * fj;
     let b = t.b_avg[j0] * (1.0 - fj) + t.b_avg[j1] * fj;
-    (f0 * a + (1.0 - f0) * b).clamp(0.0, 1.0)
+    (f0 * (a - b) + Vec3::splat(f90 * b)).clamp(Vec3::ZERO, Vec3::ONE)
+}
+
+/// The cosine-weighted average 2 ∫ (1 - E_1(mu)) (1 - E_2(mu)) mu dmu of the light two
+/// stacked specular layers both let through: layer 1 at (alpha_1, f0_1, f90_1), layer 2 at
+/// (alpha_2, f0_2, f90 = 1) weighted by `weight_2`. Their albedos rise together towards grazing
+/// angles, so this is more than the product of the two averages; it normalises the albedo
+/// scaling of a base beneath both (`material::clearcoat`). The same trapezoid rule on the
+/// same nodes as `specular_albedo_average`, so with `weight_2` 0 it is 1 - that average.
+pub fn transmitted_average_of_two(
+    (alpha_1, f0_1, f90_1): (f32, Vec3, f32),
+    (alpha_2, f0_2, weight_2): (f32, f32, f32),
+) -> Vec3 {
+    let t = tables();
+    let (a0, a1, fa) = lerp_index(alpha_1.sqrt(), N_ALPHA);
+    let (b0, b1, fb) = lerp_index(alpha_2.sqrt(), N_ALPHA);
+    let at = |g: &[f32], j0: usize, j1: usize, f: f32, i: usize| {
+        g[j0 * N_MU + i] * (1.0 - f) + g[j1 * N_MU + i] * f
+    };
+    let h = 1.0 / (N_MU - 1) as f32;
+    let mut sum = Vec3::ZERO;
+    for i in 0..N_MU {
+        let w = if i == 0 || i == N_MU - 1 { 0.5 } else { 1.0 };
+        let x = i as f32 * h;
+        let (a, b) = (at(t.a, a0, a1, fa, i), at(t.b, a0, a1, fa, i));
+        let e1 = (f0_1 * (a - b) + Vec3::splat(f90_1 * b)).clamp(Vec3::ZERO, Vec3::ONE);
+        let (a, b) = (at(t.a, b0, b1, fb, i), at(t.b, b0, b1, fb, i));
+        let e2 = (weight_2 * (f0_2 * (a - b) + b)).clamp(0.0, 1.0);
+        // What the two reflect together; the constant 1 is integrated exactly.
+        sum += w * x * x * x * (Vec3::ONE - (Vec3::ONE - e1) * (1.0 - e2));
+    }
+    Vec3::ONE - sum * 4.0 * h
 }
 
 #[cfg(test)]
@@ -161,12 +195,31 @@ mod tests {
     #[test]
     fn albedo_limits() {
         // A perfect reflector (f0 = 1) with little roughness reflects nearly everything.
-        assert!((specular_albedo(0.8, 0.01, 1.0) - 1.0).abs() < 0.01);
+        let e = |mu, alpha, f0| specular_albedo(mu, alpha, Vec3::splat(f0), 1.0).x;
+        assert!((e(0.8, 0.01, 1.0) - 1.0).abs() < 0.01);
         // f0 = 0.04 at normal incidence reflects about 4 %; more at grazing angles.
-        let e = specular_albedo(1.0, 0.1, 0.04);
-        assert!((e - 0.04).abs() < 0.01, "{e}");
-        assert!(specular_albedo(0.1, 0.1, 0.04) > e);
-        let avg = specular_albedo_average(0.3, 0.04);
+        let normal = e(1.0, 0.1, 0.04);
+        assert!((normal - 0.04).abs() < 0.01, "{normal}");
+        assert!(e(0.1, 0.1, 0.04) > normal);
+        let avg = specular_albedo_average(0.3, Vec3::splat(0.04), 1.0).x;
         assert!(avg > 0.04 && avg < 0.2, "{avg}");
+        // f90 scales the grazing part: with f0 = f90 = 0 nothing is reflected, and the
+        // albedo is linear in (f0, f90).
+        assert_eq!(specular_albedo(0.3, 0.2, Vec3::ZERO, 0.0), Vec3::ZERO);
+        let half = specular_albedo(0.3, 0.2, Vec3::splat(0.02), 0.5).x;
+        assert!((half - 0.5 * e(0.3, 0.2, 0.04)).abs() < 1e-6, "{half}");
+        // Two layers: with the second absent, one minus the first's average; together, more
+        // than the product of what each lets through (their albedos rise together).
+        let one = (0.09, Vec3::splat(0.04), 1.0);
+        let alone = transmitted_average_of_two(one, (0.01, 0.04, 0.0)).x;
+        let avg = specular_albedo_average(0.09, Vec3::splat(0.04), 1.0).x;
+        assert!(
+            (alone - (1.0 - avg)).abs() < 1e-6,
+            "{alone} vs {}",
+            1.0 - avg
+        );
+        let both = transmitted_average_of_two(one, (0.01, 0.04, 1.0)).x;
+        let coat = specular_albedo_average(0.01, Vec3::splat(0.04), 1.0).x;
+        assert!(both > (1.0 - avg) * (1.0 - coat), "{both}");
     }
 }

@@ -17,10 +17,27 @@
 //! linear mixture of three components and is sampled as a mixture of its lobes: a component is
 //! chosen by its weight, then a lobe within it; the pdf is the same mixture of lobe pdfs, so
 //! `sample_f` and `pdf` agree exactly.
+//!
+//! KHR_materials_specular changes the dielectric (plastic) component's specular layer as the
+//! extension defines (its section "Implementation"):
+//!
+//! ```text
+//!     f0  = min(((ior - 1) / (ior + 1))^2 specularColor, 1) specular
+//!     f90 = specular
+//!     F   = f0 + (f90 - f0) (1 - V.H)^5
+//! ```
+//!
+//! and the albedo coupling follows, per channel, from the layer's albedo at that (f0, f90)
+//! (`layering::specular_albedo`). The rough glass of the transmission component keeps its
+//! exact Fresnel of `ior`. KHR_materials_clearcoat puts a coat over all of it
+//! (`material::clearcoat`), sampled as one more lobe of the mixture.
 
+use crate::material::clearcoat::Clearcoat;
 use crate::material::dielectric::RoughDielectricBsdf;
-use crate::material::layering::{specular_albedo, specular_albedo_average};
-use crate::material::microfacet::{TrowbridgeReitz, fresnel_schlick};
+use crate::material::layering::{
+    specular_albedo, specular_albedo_average, transmitted_average_of_two,
+};
+use crate::material::microfacet::{TrowbridgeReitz, fresnel_schlick, fresnel_schlick_f90};
 use crate::material::{BsdfSample, TransportMode};
 use crate::sampling::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use glam::{Vec2, Vec3};
@@ -33,6 +50,11 @@ pub struct MetallicRoughnessBsdf {
     pub transmission: f32,
     pub eta: f32,
     pub distrib: TrowbridgeReitz,
+    /// KHR_materials_specular's specularFactor (times its texture's alpha): 1 is glTF's layer.
+    pub specular: f32,
+    /// KHR_materials_specular's specularColorFactor (times its texture).
+    pub specular_color: Vec3,
+    pub coat: Clearcoat,
 }
 
 /// Mirrors a reflection pair into the upper hemisphere so reflection lobes serve both faces.
@@ -59,26 +81,42 @@ impl MetallicRoughnessBsdf {
         }
     }
 
-    fn f0_dielectric(&self) -> f32 {
-        ((self.eta - 1.0) / (self.eta + 1.0)).powi(2)
+    /// The plastic component's specular reflectance at normal and grazing incidence
+    /// (KHR_materials_specular; (f0 of ior, 1) without it).
+    fn dielectric_f0_f90(&self) -> (Vec3, f32) {
+        let f0_ior = ((self.eta - 1.0) / (self.eta + 1.0)).powi(2);
+        let f0 = (f0_ior * self.specular_color).min(Vec3::ONE) * self.specular;
+        (f0, self.specular)
     }
 
     /// Probability of the specular lobe within the dielectric (plastic) component: the
     /// specular layer's share of the component's albedo, kept in [0.1, 0.9].
     fn plastic_specular_prob(&self, wo: Vec3) -> f32 {
-        let e = specular_albedo(wo.z, self.distrib.alpha, self.f0_dielectric());
-        let diffuse = (1.0 - e) * crate::geometry::luminance(self.base_color);
+        let (f0, f90) = self.dielectric_f0_f90();
+        let e = specular_albedo(wo.z, self.distrib.alpha, f0, f90);
+        let diffuse = crate::geometry::luminance((Vec3::ONE - e) * self.base_color);
+        let e = crate::geometry::luminance(e);
         (e / (e + diffuse).max(1e-6)).clamp(0.1, 0.9)
     }
 
-    /// The albedo-scaled diffuse base (Kelemen & Szirmay-Kalos 2001, eq. 5).
+    /// The albedo-scaled diffuse base (Kelemen & Szirmay-Kalos 2001, eq. 5), per channel,
+    /// beneath the specular layer and, where there is one, the clearcoat: the scale is the
+    /// light both let through at mu_o and at mu_i over its cosine-weighted average
+    /// (`material::clearcoat`).
     fn coupled_diffuse(&self, uo: Vec3, ui: Vec3) -> Vec3 {
-        let (alpha, f0) = (self.distrib.alpha, self.f0_dielectric());
-        let e_avg = specular_albedo_average(alpha, f0);
-        let scale = (1.0 - specular_albedo(uo.z, alpha, f0))
-            * (1.0 - specular_albedo(ui.z, alpha, f0))
-            / (1.0 - e_avg).max(1e-3);
-        self.base_color * (FRAC_1_PI * scale)
+        let alpha = self.distrib.alpha;
+        let (f0, f90) = self.dielectric_f0_f90();
+        let through = |mu: f32| {
+            (Vec3::ONE - specular_albedo(mu, alpha, f0, f90)) * (1.0 - self.coat.reflected(mu))
+        };
+        let average = if self.coat.is_present() {
+            let coat = (self.coat.distrib.alpha, 0.04, self.coat.weight);
+            transmitted_average_of_two((alpha, f0, f90), coat)
+        } else {
+            Vec3::ONE - specular_albedo_average(alpha, f0, f90)
+        };
+        let scale = through(uo.z) * through(ui.z) / average.max(Vec3::splat(1e-3));
+        self.base_color * scale * FRAC_1_PI
     }
 
     /// D G / (4 |cos_o cos_i|) for an upper-hemisphere pair, and the half vector.
@@ -105,8 +143,69 @@ impl MetallicRoughnessBsdf {
     }
 
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
+        let (diffuse, glossy) = self.f_base(wo, wi, mode);
+        if !self.coat.is_present() {
+            return diffuse + glossy;
+        }
+        let (mu_o, mu_i) = (wo.z.abs(), wi.z.abs());
+        let mut f = diffuse + glossy * self.coat.glossy_scale(mu_o, mu_i);
+        if wo.z * wi.z > 0.0 {
+            let (uo, ui) = to_upper(wo, wi);
+            f += Vec3::splat(self.coat.f(uo, ui));
+        }
+        f
+    }
+
+    /// Solid-angle pdf of `sample_f`.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let base = self.pdf_base(wo, wi);
+        if !self.coat.is_present() {
+            return base;
+        }
+        let p_coat = self.coat.sample_prob(wo.z.abs());
+        let mut pdf = (1.0 - p_coat) * base;
+        if wo.z * wi.z > 0.0 {
+            let (uo, ui) = to_upper(wo, wi);
+            pdf += p_coat * self.coat.pdf(uo, ui);
+        }
+        pdf
+    }
+
+    pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        if wo.z == 0.0 {
+            return None;
+        }
+        let p_coat = self.coat.sample_prob(wo.z.abs());
+        let wi = if uc < p_coat {
+            let (uo, _) = to_upper(wo, wo);
+            let ui = self.coat.sample(uo, u);
+            if ui.z <= 0.0 {
+                return None;
+            }
+            Vec3::new(ui.x, ui.y, ui.z.copysign(wo.z))
+        } else {
+            // Reuse uc, rescaled, for the choice of the base's lobe.
+            self.sample_base_wi(wo, (uc - p_coat) / (1.0 - p_coat), u, mode)?
+        };
+        let pdf = self.pdf(wo, wi);
+        let f = self.f(wo, wi, mode);
+        if !(pdf > 0.0) || !f.is_finite() {
+            return None;
+        }
+        if wo.z * wi.z > 0.0 {
+            Some(BsdfSample::reflection(f, wi, pdf, false))
+        } else {
+            let etap = if wo.z > 0.0 { self.eta } else { 1.0 / self.eta };
+            Some(BsdfSample::transmission(f, wi, pdf, false, etap))
+        }
+    }
+
+    /// The base material (metal, plastic and glass components), as its diffuse part (coupled
+    /// to the layers above it in `coupled_diffuse`) and its glossy part (which a coat scales
+    /// by `glossy_scale`).
+    fn f_base(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Vec3, Vec3) {
         let (w_metal, w_plastic, w_glass) = self.weights();
-        let mut f = Vec3::ZERO;
+        let (mut diffuse, mut f) = (Vec3::ZERO, Vec3::ZERO);
         if w_glass > 0.0 {
             f += w_glass * self.glass().f(wo, wi, mode);
         }
@@ -118,16 +217,17 @@ impl MetallicRoughnessBsdf {
                     f += w_metal * spec * fresnel_schlick(self.base_color, cos_h);
                 }
                 if w_plastic > 0.0 {
-                    let fr = fresnel_schlick(Vec3::splat(self.f0_dielectric()), cos_h).x;
-                    f += w_plastic * (self.coupled_diffuse(uo, ui) + Vec3::splat(fr * spec));
+                    let (f0, f90) = self.dielectric_f0_f90();
+                    let fr = fresnel_schlick_f90(f0, f90, cos_h);
+                    diffuse = w_plastic * self.coupled_diffuse(uo, ui);
+                    f += w_plastic * fr * spec;
                 }
             }
         }
-        f
+        (diffuse, f)
     }
 
-    /// Solid-angle pdf of `sample_f`.
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    fn pdf_base(&self, wo: Vec3, wi: Vec3) -> f32 {
         let (w_metal, w_plastic, w_glass) = self.weights();
         let mut pdf = 0.0;
         if w_glass > 0.0 {
@@ -145,10 +245,8 @@ impl MetallicRoughnessBsdf {
         pdf
     }
 
-    pub fn sample_f(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
-        if wo.z == 0.0 {
-            return None;
-        }
+    /// A direction from the base's mixture of lobes (`uc` picks the lobe).
+    fn sample_base_wi(&self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode) -> Option<Vec3> {
         let (w_metal, w_plastic, w_glass) = self.weights();
         let wi = if uc < w_glass {
             // Reuse uc, rescaled, for the interface's reflect/refract choice.
@@ -176,16 +274,6 @@ impl MetallicRoughnessBsdf {
                 ui
             }
         };
-        let pdf = self.pdf(wo, wi);
-        let f = self.f(wo, wi, mode);
-        if !(pdf > 0.0) || !f.is_finite() {
-            return None;
-        }
-        if wo.z * wi.z > 0.0 {
-            Some(BsdfSample::reflection(f, wi, pdf, false))
-        } else {
-            let etap = if wo.z > 0.0 { self.eta } else { 1.0 / self.eta };
-            Some(BsdfSample::transmission(f, wi, pdf, false, etap))
-        }
+        Some(wi)
     }
 }

@@ -103,9 +103,15 @@ pub fn fresnel_dielectric(cos_theta_i: f32, eta: f32) -> f32 {
 
 /// Schlick's approximation, as glTF specifies (spec appendix B.3.4).
 pub fn fresnel_schlick(f0: Vec3, cos_theta: f32) -> Vec3 {
+    fresnel_schlick_f90(f0, 1.0, cos_theta)
+}
+
+/// Schlick's approximation with a grazing reflectance f90 other than 1
+/// (KHR_materials_specular): f0 + (f90 - f0) (1 - cos)^5.
+pub fn fresnel_schlick_f90(f0: Vec3, f90: f32, cos_theta: f32) -> Vec3 {
     let m = (1.0 - cos_theta.abs()).clamp(0.0, 1.0);
     let m5 = m * m * m * m * m;
-    f0 + (Vec3::ONE - f0) * m5
+    f0 + (Vec3::splat(f90) - f0) * m5
 }
 
 #[cfg(test)]

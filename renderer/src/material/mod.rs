@@ -3,6 +3,7 @@
 //! names, each modelling only what it needs. All BSDFs work in the local shading frame (+z is
 //! the shading normal) and serve both faces of a surface.
 
+pub mod clearcoat;
 pub mod dielectric;
 pub mod diffuse;
 pub mod layering;
@@ -15,6 +16,7 @@ pub mod mirror;
 mod tests;
 
 use crate::texture::{TexCoords, Texture};
+use clearcoat::Clearcoat;
 use dielectric::DielectricBsdf;
 use diffuse::DiffuseBsdf;
 use glam::{Affine2, Vec2, Vec3};
@@ -164,6 +166,18 @@ pub struct Material {
     /// baseColorFactor's alpha (times the base colour texture's alpha where there is one).
     pub alpha: f32,
     pub alpha_mode: AlphaMode,
+    /// KHR_materials_specular: specularFactor and its texture (alpha channel).
+    pub specular: f32,
+    pub specular_texture: Option<TextureRef>,
+    /// KHR_materials_specular: specularColorFactor and its texture (sRGB).
+    pub specular_color: Vec3,
+    pub specular_color_texture: Option<TextureRef>,
+    /// KHR_materials_clearcoat: clearcoatFactor and its texture (R channel).
+    pub clearcoat: f32,
+    pub clearcoat_texture: Option<TextureRef>,
+    /// KHR_materials_clearcoat: clearcoatRoughnessFactor and its texture (G channel).
+    pub clearcoat_roughness: f32,
+    pub clearcoat_roughness_texture: Option<TextureRef>,
 }
 
 /// glTF's alphaMode (spec 3.9.4): how a surface's alpha decides where it is.
@@ -196,6 +210,14 @@ impl Default for Material {
             absorption: Vec3::ZERO,
             alpha: 1.0,
             alpha_mode: AlphaMode::Opaque,
+            specular: 1.0,
+            specular_texture: None,
+            specular_color: Vec3::ONE,
+            specular_color_texture: None,
+            clearcoat: 0.0,
+            clearcoat_texture: None,
+            clearcoat_roughness: 0.0,
+            clearcoat_roughness_texture: None,
         }
     }
 }
@@ -245,8 +267,18 @@ impl Material {
         }
     }
 
+    /// Whether KHR_materials_specular or KHR_materials_clearcoat change the
+    /// metallic-roughness model (only that BSDF has their layers).
+    fn has_layers(&self) -> bool {
+        self.specular != 1.0
+            || self.specular_texture.is_some()
+            || self.specular_color != Vec3::ONE
+            || self.specular_color_texture.is_some()
+            || self.clearcoat > 0.0
+    }
+
     pub fn kind(&self) -> MaterialKind {
-        let factors_only = self.metallic_roughness_texture.is_none();
+        let factors_only = self.metallic_roughness_texture.is_none() && !self.has_layers();
         if factors_only && self.transmission > 0.0 && self.roughness == 0.0 && self.metallic == 0.0
         {
             MaterialKind::Dielectric
@@ -275,6 +307,10 @@ impl Material {
             self.metallic_roughness_texture,
             self.emissive_texture,
             self.normal_texture.map(|(r, _)| r),
+            self.specular_texture,
+            self.specular_color_texture,
+            self.clearcoat_texture,
+            self.clearcoat_roughness_texture,
         ]
         .into_iter()
         .flatten()
@@ -306,12 +342,30 @@ impl Material {
                 let mr = Self::texture_rgba(textures, self.metallic_roughness_texture, uv);
                 let roughness = (self.roughness * mr.y).clamp(0.0, 1.0);
                 let metallic = (self.metallic * mr.z).clamp(0.0, 1.0);
+                let rgba = |t| Self::texture_rgba(textures, t, uv);
+                let coat = if self.clearcoat > 0.0 {
+                    let weight = self.clearcoat * rgba(self.clearcoat_texture).x;
+                    let roughness =
+                        self.clearcoat_roughness * rgba(self.clearcoat_roughness_texture).y;
+                    let roughness = roughness.clamp(0.0, 1.0);
+                    Clearcoat {
+                        weight: weight.clamp(0.0, 1.0),
+                        distrib: TrowbridgeReitz::new(roughness * roughness),
+                    }
+                } else {
+                    Clearcoat::NONE
+                };
                 Bsdf::MetallicRoughness(MetallicRoughnessBsdf {
                     base_color: base,
                     metallic,
                     transmission: self.transmission.clamp(0.0, 1.0),
                     eta: self.ior,
                     distrib: TrowbridgeReitz::new(roughness * roughness),
+                    specular: (self.specular * rgba(self.specular_texture).w).clamp(0.0, 1.0),
+                    specular_color: (self.specular_color
+                        * rgba(self.specular_color_texture).truncate())
+                    .max(Vec3::ZERO),
+                    coat,
                 })
             }
         }
@@ -326,5 +380,8 @@ pub fn rough_dielectric(eta: f32, alpha: f32) -> Bsdf {
         transmission: 1.0,
         eta,
         distrib: TrowbridgeReitz::new(alpha),
+        specular: 1.0,
+        specular_color: Vec3::ONE,
+        coat: Clearcoat::NONE,
     })
 }

@@ -22,7 +22,12 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_texture_transform",
     "KHR_materials_unlit",
     "KHR_materials_volume",
+    "KHR_materials_specular",
+    "KHR_materials_clearcoat",
 ];
+
+/// Those of `SUPPORTED_EXTENSIONS` that the gltf crate does not parse: read from the JSON.
+const READ_FROM_JSON: &[&str] = &["KHR_materials_clearcoat"];
 
 const MAX_NODE_DEPTH: usize = 256;
 
@@ -50,7 +55,7 @@ fn err(problem: impl Into<String>) -> SceneError {
 
 fn read(path: &Path) -> Result<SceneDescription, SceneError> {
     let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read file: {e}")))?;
-    let (root, blob) = parse(&bytes)?;
+    let (mut root, blob) = parse(&bytes)?;
     for ext in &root.extensions_required {
         if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
             return Err(err(format!(
@@ -65,6 +70,10 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
         .filter(|ext| !SUPPORTED_EXTENSIONS.contains(&ext.as_str()))
         .map(|ext| format!("uses the extension {ext}, which is not read (ignored)"))
         .collect();
+    // The gltf crate refuses required extensions it does not parse itself; those we read
+    // from the raw JSON have been checked above.
+    root.extensions_required
+        .retain(|ext| !READ_FROM_JSON.contains(&ext.as_str()));
     // Validate after the extension check, so an unknown required extension is named as such.
     let document = gltf::Document::from_json(root).map_err(validation_error)?;
     let base = path.parent().unwrap_or(Path::new("."));
@@ -72,6 +81,7 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
     check_views_and_accessors(&document, &buffers)?;
 
     let mut loader = Loader {
+        document: &document,
         buffers: &buffers,
         base,
         desc: SceneDescription {
@@ -313,6 +323,7 @@ fn check_sparse(
 }
 
 struct Loader<'a> {
+    document: &'a gltf::Document,
     buffers: &'a [gltf::buffer::Data],
     base: &'a Path,
     desc: SceneDescription,
@@ -605,6 +616,43 @@ impl Loader<'_> {
         material.emissive_texture = m
             .emissive_texture()
             .and_then(|t| self.texture_info(&t, true));
+        if let Some(sp) = m.specular() {
+            material.specular = sp.specular_factor();
+            material.specular_color = Vec3::from(sp.specular_color_factor());
+            material.specular_texture = sp
+                .specular_texture()
+                .and_then(|t| self.texture_info(&t, false));
+            material.specular_color_texture = sp
+                .specular_color_texture()
+                .and_then(|t| self.texture_info(&t, true));
+        }
+        if let Some(coat) = m
+            .extensions()
+            .and_then(|e| e.get("KHR_materials_clearcoat"))
+        {
+            self.clearcoat(&mut material, m.index(), coat)?;
+        }
+        let layers = [
+            ("KHR_materials_specular specularFactor", material.specular),
+            (
+                "KHR_materials_clearcoat clearcoatFactor",
+                material.clearcoat,
+            ),
+            (
+                "KHR_materials_clearcoat clearcoatRoughnessFactor",
+                material.clearcoat_roughness,
+            ),
+        ];
+        for (what, v) in layers {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(err(format!("material '{label}': invalid {what} {v}")));
+            }
+        }
+        if !(material.specular_color.is_finite() && material.specular_color.min_element() >= 0.0) {
+            return Err(err(format!(
+                "material '{label}': invalid KHR_materials_specular specularColorFactor"
+            )));
+        }
         material.normal_texture = m.normal_texture().and_then(|t| {
             self.texture(&t.texture(), t.tex_coord(), Affine2::IDENTITY, false)
                 .map(|r| (r, t.scale()))
@@ -634,6 +682,65 @@ impl Loader<'_> {
         Ok(i)
     }
 
+    /// KHR_materials_clearcoat, which the gltf crate does not parse: its factors and
+    /// textures from the material's JSON (`coat`). The coat's normal texture is not read.
+    fn clearcoat(
+        &mut self,
+        material: &mut Material,
+        index: Option<usize>,
+        coat: &serde_json::Value,
+    ) -> Result<(), SceneError> {
+        let at = format!(
+            "materials[{}].extensions.KHR_materials_clearcoat",
+            index.unwrap_or(0)
+        );
+        let factor = |name: &str| match coat.get(name) {
+            None => Ok(0.0),
+            Some(v) => v
+                .as_f64()
+                .map(|v| v as f32)
+                .ok_or_else(|| err(format!("{at}.{name}: not a number"))),
+        };
+        material.clearcoat = factor("clearcoatFactor")?;
+        material.clearcoat_roughness = factor("clearcoatRoughnessFactor")?;
+        material.clearcoat_texture = self.json_texture_info(coat, "clearcoatTexture", &at)?;
+        material.clearcoat_roughness_texture =
+            self.json_texture_info(coat, "clearcoatRoughnessTexture", &at)?;
+        if coat.get("clearcoatNormalTexture").is_some() {
+            self.desc.warnings.push(format!(
+                "{at}.clearcoatNormalTexture ignored: the coat takes the base's normals"
+            ));
+        }
+        Ok(())
+    }
+
+    /// A textureInfo (spec 5.29) inside an extension the gltf crate does not parse.
+    fn json_texture_info(
+        &mut self,
+        parent: &serde_json::Value,
+        name: &str,
+        at: &str,
+    ) -> Result<Option<TextureRef>, SceneError> {
+        let Some(value) = parent.get(name) else {
+            return Ok(None);
+        };
+        let info: gltf::json::texture::Info =
+            serde_json::from_value(value.clone()).map_err(|e| err(format!("{at}.{name}: {e}")))?;
+        let Some(texture) = self.document.textures().nth(info.index.value()) else {
+            return Err(err(format!(
+                "{at}.{name}: texture {} does not exist",
+                info.index.value()
+            )));
+        };
+        let transform = info
+            .extensions
+            .as_ref()
+            .and_then(|e| e.texture_transform.as_ref());
+        let parts = transform.map(|t| (t.offset.0, t.rotation.0, t.scale.0, t.tex_coord));
+        let (transform, tex_coord) = self.transform(texture.index(), parts, info.tex_coord);
+        Ok(self.texture(&texture, tex_coord, transform, false))
+    }
+
     /// Decodes an image once, to RGBA8; None (with a warning) when it cannot be read.
     fn image_rgba8(&mut self, image: &gltf::Image) -> Option<(usize, usize, Vec<u8>)> {
         if let Some(cached) = self.images.get(&image.index()) {
@@ -661,27 +768,36 @@ impl Loader<'_> {
     /// model's markers confirm the direction). The extension's texCoord overrides the
     /// reference's.
     fn texture_info(&mut self, info: &gltf::texture::Info, srgb: bool) -> Option<TextureRef> {
-        let (transform, tex_coord) = match info.texture_transform() {
-            None => (Affine2::IDENTITY, info.tex_coord()),
-            Some(t) => {
-                let transform = Affine2::from_scale_angle_translation(
-                    Vec2::from(t.scale()),
-                    -t.rotation(),
-                    Vec2::from(t.offset()),
-                );
-                let tex_coord = t.tex_coord().unwrap_or(info.tex_coord());
-                if transform.is_finite() {
-                    (transform, tex_coord)
-                } else {
-                    self.desc.warnings.push(format!(
-                        "texture {}: KHR_texture_transform is not finite, ignored",
-                        info.texture().index()
-                    ));
-                    (Affine2::IDENTITY, tex_coord)
-                }
-            }
-        };
+        let parts = info
+            .texture_transform()
+            .map(|t| (t.offset(), t.rotation(), t.scale(), t.tex_coord()));
+        let (transform, tex_coord) =
+            self.transform(info.texture().index(), parts, info.tex_coord());
         self.texture(&info.texture(), tex_coord, transform, srgb)
+    }
+
+    /// The map and TEXCOORD set of a texture reference from KHR_texture_transform's
+    /// (offset, rotation, scale, texCoord), when it has one (see `texture_info`).
+    fn transform(
+        &mut self,
+        texture: usize,
+        parts: Option<([f32; 2], f32, [f32; 2], Option<u32>)>,
+        tex_coord: u32,
+    ) -> (Affine2, u32) {
+        let Some((offset, rotation, scale, set)) = parts else {
+            return (Affine2::IDENTITY, tex_coord);
+        };
+        let transform =
+            Affine2::from_scale_angle_translation(Vec2::from(scale), -rotation, Vec2::from(offset));
+        let tex_coord = set.unwrap_or(tex_coord);
+        if transform.is_finite() {
+            (transform, tex_coord)
+        } else {
+            self.desc.warnings.push(format!(
+                "texture {texture}: KHR_texture_transform is not finite, ignored"
+            ));
+            (Affine2::IDENTITY, tex_coord)
+        }
     }
 
     fn texture(

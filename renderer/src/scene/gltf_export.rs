@@ -181,6 +181,18 @@ fn gltf_parts(desc: &SceneDescription) -> (Value, Vec<u8>) {
             if m.ior != 1.5 {
                 ext.insert("KHR_materials_ior".into(), json!({"ior": m.ior}));
             }
+            if m.specular != 1.0 || m.specular_color != Vec3::ONE {
+                ext.insert(
+                    "KHR_materials_specular".into(),
+                    json!({"specularFactor": m.specular, "specularColorFactor": m.specular_color.to_array()}),
+                );
+            }
+            if m.clearcoat > 0.0 {
+                ext.insert(
+                    "KHR_materials_clearcoat".into(),
+                    json!({"clearcoatFactor": m.clearcoat, "clearcoatRoughnessFactor": m.clearcoat_roughness}),
+                );
+            }
             for k in ext.keys() {
                 if !extensions_used.contains(k) {
                     extensions_used.push(k.clone());
