@@ -326,3 +326,27 @@ fn uniform_environment_on_coated_and_specular_planes() {
         exact as f64,
     );
 }
+
+/// KHR_materials_sheen under the environment of radiance 1: a sheen of colour C over a base
+/// that reflects nothing reflects C E(mu_o), E the sheen lobe's albedo (its table is checked
+/// against Monte Carlo integration in a unit test).
+#[test]
+fn uniform_environment_on_a_sheen_plane() {
+    use caustica_renderer::material::sheen;
+    let mu_o = EYE.normalize().y;
+    let velvet = Material {
+        base_color: Vec3::ZERO,
+        metallic: 0.0,
+        roughness: 1.0,
+        specular: 0.0,
+        sheen_color: Vec3::new(0.9, 0.5, 0.2),
+        sheen_roughness: 0.5,
+        ..Default::default()
+    };
+    let exact = 0.9 * sheen::albedo(mu_o, 0.5);
+    assert_close(
+        "environment, sheen",
+        render_mean(plane_scene(velvet), 64),
+        exact as f64,
+    );
+}

@@ -801,12 +801,12 @@ fn an_unlit_material_emits_its_base_colour_and_reflects_nothing() {
     v["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = json!(1.0);
     v["materials"][0]["extensions"] = json!({"KHR_materials_unlit": {}});
     // Used but not required: read without it, and said so.
-    v["extensionsUsed"] = json!(["KHR_materials_unlit", "KHR_materials_sheen"]);
+    v["extensionsUsed"] = json!(["KHR_materials_unlit", "KHR_materials_iridescence"]);
     v["extensionsRequired"] = json!(["KHR_materials_unlit"]);
     let scene = load(&write_json(&dir, "unlit.gltf", &v)).unwrap();
     for expected in [
         "asks for an unlit look",
-        "KHR_materials_sheen, which is not read",
+        "KHR_materials_iridescence, which is not read",
     ] {
         assert!(
             scene.info.warnings.iter().any(|w| w.contains(expected)),
@@ -976,9 +976,10 @@ fn volume_attenuation_becomes_an_absorption_coefficient() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
-/// KHR_materials_specular and KHR_materials_clearcoat are read into the material's layers:
+/// KHR_materials_specular, _clearcoat and _sheen are read into the material's layers:
 /// factors, textures with their channel's colour space, texCoord and texture transform (the
-/// clearcoat's from the material's raw JSON, which the gltf crate does not parse); the coat's
+/// clearcoat's and sheen's from the material's raw JSON, which the gltf crate does not
+/// parse); the coat's
 /// normal texture is named in a warning; a bad factor or texture index is an error naming the
 /// JSON path.
 #[test]
@@ -997,10 +998,16 @@ fn specular_and_clearcoat_layers_are_read() {
             "clearcoatTexture": {"index": 0, "texCoord": 1,
                 "extensions": {"KHR_texture_transform": {"scale": [2.0, 2.0]}}},
             "clearcoatRoughnessTexture": {"index": 0},
-            "clearcoatNormalTexture": {"index": 0}}
+            "clearcoatNormalTexture": {"index": 0}},
+        "KHR_materials_sheen": {"sheenColorFactor": [0.5, 0.25, 1.0], "sheenRoughnessFactor": 0.75,
+            "sheenColorTexture": {"index": 0}, "sheenRoughnessTexture": {"index": 0}}
     });
-    v["extensionsUsed"] = json!(["KHR_materials_specular", "KHR_materials_clearcoat"]);
-    v["extensionsRequired"] = json!(["KHR_materials_clearcoat"]);
+    v["extensionsUsed"] = json!([
+        "KHR_materials_specular",
+        "KHR_materials_clearcoat",
+        "KHR_materials_sheen"
+    ]);
+    v["extensionsRequired"] = json!(["KHR_materials_clearcoat", "KHR_materials_sheen"]);
     let desc = load_description(&write_json(&dir, "layers.gltf", &v)).unwrap();
     let m = &desc.materials[0];
     assert_eq!(
@@ -1008,6 +1015,10 @@ fn specular_and_clearcoat_layers_are_read() {
         (0.5, Vec3::new(1.0, 0.5, 0.25))
     );
     assert_eq!((m.clearcoat, m.clearcoat_roughness), (0.8, 0.3));
+    assert_eq!(
+        (m.sheen_color, m.sheen_roughness),
+        (Vec3::new(0.5, 0.25, 1.0), 0.75)
+    );
     assert_eq!(m.kind(), MaterialKind::MetallicRoughness);
     let coat = m.clearcoat_texture.expect("the clearcoat texture is read");
     assert_eq!(coat.tex_coord, 1);
@@ -1020,6 +1031,8 @@ fn specular_and_clearcoat_layers_are_read() {
     let (linear, srgb) = (coat.texture, m.specular_color_texture.unwrap().texture);
     assert_eq!(m.specular_texture.unwrap().texture, linear);
     assert_eq!(m.clearcoat_roughness_texture.unwrap().texture, linear);
+    assert_eq!(m.sheen_roughness_texture.unwrap().texture, linear);
+    assert_eq!(m.sheen_color_texture.unwrap().texture, srgb);
     assert_ne!(linear, srgb);
     assert!(
         desc.warnings
@@ -1035,6 +1048,8 @@ fn specular_and_clearcoat_layers_are_read() {
         specular_color: Vec3::new(0.5, 1.0, 2.0),
         clearcoat: 0.5,
         clearcoat_roughness: 0.125,
+        sheen_color: Vec3::new(0.75, 0.5, 0.25),
+        sheen_roughness: 0.375,
         ..Material::diffuse(Vec3::ONE)
     };
     let back = load_description(&write_json(&dir, "export.gltf", &to_gltf(&layered))).unwrap();
@@ -1044,6 +1059,10 @@ fn specular_and_clearcoat_layers_are_read() {
         (0.25, Vec3::new(0.5, 1.0, 2.0))
     );
     assert_eq!((m.clearcoat, m.clearcoat_roughness), (0.5, 0.125));
+    assert_eq!(
+        (m.sheen_color, m.sheen_roughness),
+        (Vec3::new(0.75, 0.5, 0.25), 0.375)
+    );
     v["materials"][0]["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"] = json!("x");
     expect_error(
         &write_json(&dir, "bad-factor.gltf", &v),

@@ -29,8 +29,14 @@
 //!
 //! and the albedo coupling follows, per channel, from the layer's albedo at that (f0, f90)
 //! (`layering::specular_albedo`). The rough glass of the transmission component keeps its
-//! exact Fresnel of `ior`. KHR_materials_clearcoat puts a coat over all of it
-//! (`material::clearcoat`), sampled as one more lobe of the mixture.
+//! exact Fresnel of `ior`. KHR_materials_sheen puts a fibre layer over the base
+//! (`material::sheen`) and KHR_materials_clearcoat a coat over everything, the sheen included
+//! (`material::clearcoat`), as the extensions order them; each is sampled as one more lobe of
+//! the mixture:
+//!
+//! ```text
+//!     f = c f_coat + f_diffuse' S + min(t_o, t_i) (f_glossy S + f_sheen),  S = sheen's base scale
+//! ```
 
 use crate::material::clearcoat::Clearcoat;
 use crate::material::dielectric::RoughDielectricBsdf;
@@ -38,6 +44,7 @@ use crate::material::layering::{
     specular_albedo, specular_albedo_average, transmitted_average_of_two,
 };
 use crate::material::microfacet::{TrowbridgeReitz, fresnel_schlick, fresnel_schlick_f90};
+use crate::material::sheen::Sheen;
 use crate::material::{BsdfSample, TransportMode};
 use crate::sampling::warp::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use glam::{Vec2, Vec3};
@@ -55,6 +62,7 @@ pub struct MetallicRoughnessBsdf {
     /// KHR_materials_specular's specularColorFactor (times its texture).
     pub specular_color: Vec3,
     pub coat: Clearcoat,
+    pub sheen: Sheen,
 }
 
 /// Mirrors a reflection pair into the upper hemisphere so reflection lobes serve both faces.
@@ -144,14 +152,16 @@ impl MetallicRoughnessBsdf {
 
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
         let (diffuse, glossy) = self.f_base(wo, wi, mode);
-        if !self.coat.is_present() {
+        if !self.coat.is_present() && !self.sheen.is_present() {
             return diffuse + glossy;
         }
         let (mu_o, mu_i) = (wo.z.abs(), wi.z.abs());
-        let mut f = diffuse + glossy * self.coat.glossy_scale(mu_o, mu_i);
+        let s = self.sheen.base_scale(mu_o, mu_i);
+        let t = self.coat.glossy_scale(mu_o, mu_i);
+        let mut f = (diffuse + glossy * t) * s;
         if wo.z * wi.z > 0.0 {
             let (uo, ui) = to_upper(wo, wi);
-            f += Vec3::splat(self.coat.f(uo, ui));
+            f += self.sheen.f(uo, ui) * t + Vec3::splat(self.coat.f(uo, ui));
         }
         f
     }
@@ -159,14 +169,16 @@ impl MetallicRoughnessBsdf {
     /// Solid-angle pdf of `sample_f`.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let base = self.pdf_base(wo, wi);
-        if !self.coat.is_present() {
+        if !self.coat.is_present() && !self.sheen.is_present() {
             return base;
         }
         let p_coat = self.coat.sample_prob(wo.z.abs());
-        let mut pdf = (1.0 - p_coat) * base;
+        let p_sheen = self.sheen.sample_prob(wo.z.abs());
+        let mut pdf = (1.0 - p_coat) * (1.0 - p_sheen) * base;
         if wo.z * wi.z > 0.0 {
             let (uo, ui) = to_upper(wo, wi);
             pdf += p_coat * self.coat.pdf(uo, ui);
+            pdf += (1.0 - p_coat) * p_sheen * cosine_hemisphere_pdf(ui.z);
         }
         pdf
     }
@@ -176,16 +188,22 @@ impl MetallicRoughnessBsdf {
             return None;
         }
         let p_coat = self.coat.sample_prob(wo.z.abs());
-        let wi = if uc < p_coat {
+        let p_sheen = self.sheen.sample_prob(wo.z.abs());
+        // uc picks the coat, then (rescaled) the sheen, then (rescaled) the base's lobe.
+        let uc_sheen = (uc - p_coat) / (1.0 - p_coat);
+        let wi = if uc < p_coat || uc_sheen < p_sheen {
             let (uo, _) = to_upper(wo, wo);
-            let ui = self.coat.sample(uo, u);
+            let ui = if uc < p_coat {
+                self.coat.sample(uo, u)
+            } else {
+                sample_cosine_hemisphere(u)
+            };
             if ui.z <= 0.0 {
                 return None;
             }
             Vec3::new(ui.x, ui.y, ui.z.copysign(wo.z))
         } else {
-            // Reuse uc, rescaled, for the choice of the base's lobe.
-            self.sample_base_wi(wo, (uc - p_coat) / (1.0 - p_coat), u, mode)?
+            self.sample_base_wi(wo, (uc_sheen - p_sheen) / (1.0 - p_sheen), u, mode)?
         };
         let pdf = self.pdf(wo, wi);
         let f = self.f(wo, wi, mode);

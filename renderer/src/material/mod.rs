@@ -11,6 +11,7 @@ mod layering_table;
 pub mod metallic_roughness;
 pub mod microfacet;
 pub mod mirror;
+pub mod sheen;
 
 #[cfg(test)]
 mod tests;
@@ -23,6 +24,7 @@ use glam::{Affine2, Vec2, Vec3};
 use metallic_roughness::MetallicRoughnessBsdf;
 use microfacet::TrowbridgeReitz;
 use mirror::MirrorBsdf;
+use sheen::Sheen;
 
 /// Whether a path carries radiance (from the camera) or importance (from a light); it matters
 /// for refraction's 1/eta^2 scaling (Veach's thesis, section 5.2).
@@ -178,6 +180,12 @@ pub struct Material {
     /// KHR_materials_clearcoat: clearcoatRoughnessFactor and its texture (G channel).
     pub clearcoat_roughness: f32,
     pub clearcoat_roughness_texture: Option<TextureRef>,
+    /// KHR_materials_sheen: sheenColorFactor and its texture (sRGB).
+    pub sheen_color: Vec3,
+    pub sheen_color_texture: Option<TextureRef>,
+    /// KHR_materials_sheen: sheenRoughnessFactor and its texture (alpha channel).
+    pub sheen_roughness: f32,
+    pub sheen_roughness_texture: Option<TextureRef>,
 }
 
 /// glTF's alphaMode (spec 3.9.4): how a surface's alpha decides where it is.
@@ -218,6 +226,10 @@ impl Default for Material {
             clearcoat_texture: None,
             clearcoat_roughness: 0.0,
             clearcoat_roughness_texture: None,
+            sheen_color: Vec3::ZERO,
+            sheen_color_texture: None,
+            sheen_roughness: 0.0,
+            sheen_roughness_texture: None,
         }
     }
 }
@@ -267,14 +279,15 @@ impl Material {
         }
     }
 
-    /// Whether KHR_materials_specular or KHR_materials_clearcoat change the
-    /// metallic-roughness model (only that BSDF has their layers).
+    /// Whether KHR_materials_specular, _clearcoat or _sheen change the metallic-roughness
+    /// model (only that BSDF has their layers).
     fn has_layers(&self) -> bool {
         self.specular != 1.0
             || self.specular_texture.is_some()
             || self.specular_color != Vec3::ONE
             || self.specular_color_texture.is_some()
             || self.clearcoat > 0.0
+            || self.sheen_color.max_element() > 0.0
     }
 
     pub fn kind(&self) -> MaterialKind {
@@ -311,6 +324,8 @@ impl Material {
             self.specular_color_texture,
             self.clearcoat_texture,
             self.clearcoat_roughness_texture,
+            self.sheen_color_texture,
+            self.sheen_roughness_texture,
         ]
         .into_iter()
         .flatten()
@@ -366,6 +381,14 @@ impl Material {
                         * rgba(self.specular_color_texture).truncate())
                     .max(Vec3::ZERO),
                     coat,
+                    sheen: if self.sheen_color.max_element() > 0.0 {
+                        Sheen::new(
+                            self.sheen_color * rgba(self.sheen_color_texture).truncate(),
+                            self.sheen_roughness * rgba(self.sheen_roughness_texture).w,
+                        )
+                    } else {
+                        Sheen::NONE
+                    },
                 })
             }
         }
@@ -383,5 +406,6 @@ pub fn rough_dielectric(eta: f32, alpha: f32) -> Bsdf {
         specular: 1.0,
         specular_color: Vec3::ONE,
         coat: Clearcoat::NONE,
+        sheen: Sheen::NONE,
     })
 }

@@ -24,6 +24,18 @@ fn mr(base: Vec3, metallic: f32, roughness: f32, transmission: f32) -> Bsdf {
         specular: 1.0,
         specular_color: Vec3::ONE,
         coat: clearcoat::Clearcoat::NONE,
+        sheen: sheen::Sheen::NONE,
+    })
+}
+
+/// `bsdf` (a metallic-roughness one) under a sheen of `color` and `roughness`.
+fn with_sheen(bsdf: Bsdf, color: Vec3, roughness: f32) -> Bsdf {
+    let Bsdf::MetallicRoughness(b) = bsdf else {
+        unreachable!("layers belong to the metallic-roughness BSDF")
+    };
+    Bsdf::MetallicRoughness(MetallicRoughnessBsdf {
+        sheen: sheen::Sheen::new(color, roughness),
+        ..b
     })
 }
 
@@ -122,6 +134,24 @@ fn non_delta_cases() -> Vec<(&'static str, Bsdf, f32)> {
             coated(mr(Vec3::ONE, 0.0, 0.3, 1.0), 0.8, 0.05),
             0.8,
         ),
+        (
+            "sheen over plastic, grazing",
+            with_sheen(
+                mr(Vec3::new(0.2, 0.1, 0.5), 0.0, 0.8, 0.0),
+                Vec3::new(1.0, 0.8, 0.9),
+                0.3,
+            ),
+            0.2,
+        ),
+        (
+            "sheen and clearcoat over metal, from below",
+            coated(
+                with_sheen(mr(Vec3::splat(0.9), 1.0, 0.3, 0.0), Vec3::splat(0.5), 0.8),
+                0.7,
+                0.2,
+            ),
+            -0.6,
+        ),
     ]
 }
 
@@ -205,6 +235,13 @@ fn white_furnace_albedo_never_exceeds_one() {
             coated(mr(Vec3::ONE, 0.0, 0.3, 0.0), 1.0, 0.1),
             coated(mr(Vec3::ONE, 1.0, 0.2, 0.0), 1.0, 0.5),
             coated(mr(Vec3::ONE, 0.0, 0.4, 1.0), 0.5, 0.2),
+            with_sheen(mr(Vec3::ONE, 0.0, 1.0, 0.0), Vec3::ONE, 0.1),
+            with_sheen(mr(Vec3::ONE, 1.0, 0.3, 0.0), Vec3::ONE, 0.6),
+            coated(
+                with_sheen(mr(Vec3::ONE, 0.0, 0.5, 0.0), Vec3::ONE, 1.0),
+                1.0,
+                0.1,
+            ),
         ];
         for bsdf in cases {
             let (a, err) = albedo(&bsdf, wo, TransportMode::Importance, n);
@@ -338,6 +375,29 @@ fn a_clearcoat_reflects_its_own_lobe_and_keeps_a_lossless_base_lossless() {
                 (a.x - 1.0).abs() <= 5.0 * err + 2e-3,
                 "coat {weight}, {roughness} over white at cos {cos_o}: albedo {} ± {err}",
                 a.x
+            );
+        }
+    }
+}
+
+/// A sheen over a base that reflects nothing (black, specular 0) reflects its own lobe:
+/// sheenColor E(mu) per channel, E from its table (checked against Monte Carlo in
+/// `material::sheen`). Sheens over white bases are in `white_furnace_albedo_never_exceeds_one`.
+#[test]
+fn a_sheen_reflects_its_own_lobe_over_a_black_base() {
+    let colour = Vec3::new(1.0, 0.5, 0.25);
+    for roughness in [0.2f32, 0.7] {
+        for cos_o in [0.9f32, 0.4, 0.1] {
+            let dark = with_sheen(
+                with_specular(mr(Vec3::ZERO, 0.0, 0.5, 0.0), 0.0, Vec3::ONE),
+                colour,
+                roughness,
+            );
+            let (a, err) = albedo(&dark, wo_at(cos_o), TransportMode::Radiance, 400_000);
+            let expected = colour * sheen::albedo(cos_o, roughness);
+            assert!(
+                (a - expected).abs().max_element() <= 5.0 * err + 2e-3,
+                "sheen {roughness} at cos {cos_o}: albedo {a} ± {err}, expected {expected}"
             );
         }
     }

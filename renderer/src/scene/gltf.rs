@@ -24,10 +24,11 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_volume",
     "KHR_materials_specular",
     "KHR_materials_clearcoat",
+    "KHR_materials_sheen",
 ];
 
 /// Those of `SUPPORTED_EXTENSIONS` that the gltf crate does not parse: read from the JSON.
-const READ_FROM_JSON: &[&str] = &["KHR_materials_clearcoat"];
+const READ_FROM_JSON: &[&str] = &["KHR_materials_clearcoat", "KHR_materials_sheen"];
 
 const MAX_NODE_DEPTH: usize = 256;
 
@@ -125,6 +126,18 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
         return Err(err("the scene has no triangle meshes"));
     }
     Ok(loader.desc)
+}
+
+/// The number `name` of an extension's JSON object `parent` (at JSON path `at`); 0 when
+/// absent, as every factor the layered-material extensions define defaults to.
+fn json_number(parent: &serde_json::Value, name: &str, at: &str) -> Result<f32, SceneError> {
+    match parent.get(name) {
+        None => Ok(0.0),
+        Some(v) => v
+            .as_f64()
+            .map(|v| v as f32)
+            .ok_or_else(|| err(format!("{at}.{name}: not a number"))),
+    }
 }
 
 /// KHR_materials_volume's absorption coefficient: light that travels `attenuation_distance`
@@ -626,11 +639,12 @@ impl Loader<'_> {
                 .specular_color_texture()
                 .and_then(|t| self.texture_info(&t, true));
         }
-        if let Some(coat) = m
-            .extensions()
-            .and_then(|e| e.get("KHR_materials_clearcoat"))
-        {
+        let extension = |name: &str| m.extensions().and_then(|e| e.get(name));
+        if let Some(coat) = extension("KHR_materials_clearcoat") {
             self.clearcoat(&mut material, m.index(), coat)?;
+        }
+        if let Some(sheen) = extension("KHR_materials_sheen") {
+            self.sheen(&mut material, m.index(), sheen)?;
         }
         let layers = [
             ("KHR_materials_specular specularFactor", material.specular),
@@ -641,6 +655,14 @@ impl Loader<'_> {
             (
                 "KHR_materials_clearcoat clearcoatRoughnessFactor",
                 material.clearcoat_roughness,
+            ),
+            (
+                "KHR_materials_sheen sheenRoughnessFactor",
+                material.sheen_roughness,
+            ),
+            (
+                "KHR_materials_sheen sheenColorFactor",
+                material.sheen_color.min_element(),
             ),
         ];
         for (what, v) in layers {
@@ -694,23 +716,43 @@ impl Loader<'_> {
             "materials[{}].extensions.KHR_materials_clearcoat",
             index.unwrap_or(0)
         );
-        let factor = |name: &str| match coat.get(name) {
-            None => Ok(0.0),
-            Some(v) => v
-                .as_f64()
-                .map(|v| v as f32)
-                .ok_or_else(|| err(format!("{at}.{name}: not a number"))),
-        };
-        material.clearcoat = factor("clearcoatFactor")?;
-        material.clearcoat_roughness = factor("clearcoatRoughnessFactor")?;
-        material.clearcoat_texture = self.json_texture_info(coat, "clearcoatTexture", &at)?;
+        material.clearcoat = json_number(coat, "clearcoatFactor", &at)?;
+        material.clearcoat_roughness = json_number(coat, "clearcoatRoughnessFactor", &at)?;
+        material.clearcoat_texture =
+            self.json_texture_info(coat, "clearcoatTexture", &at, false)?;
         material.clearcoat_roughness_texture =
-            self.json_texture_info(coat, "clearcoatRoughnessTexture", &at)?;
+            self.json_texture_info(coat, "clearcoatRoughnessTexture", &at, false)?;
         if coat.get("clearcoatNormalTexture").is_some() {
             self.desc.warnings.push(format!(
                 "{at}.clearcoatNormalTexture ignored: the coat takes the base's normals"
             ));
         }
+        Ok(())
+    }
+
+    /// KHR_materials_sheen, which the gltf crate does not parse: its factors and textures
+    /// from the material's JSON (`sheen`).
+    fn sheen(
+        &mut self,
+        material: &mut Material,
+        index: Option<usize>,
+        sheen: &serde_json::Value,
+    ) -> Result<(), SceneError> {
+        let at = format!(
+            "materials[{}].extensions.KHR_materials_sheen",
+            index.unwrap_or(0)
+        );
+        material.sheen_color = match sheen.get("sheenColorFactor") {
+            None => Vec3::ZERO,
+            Some(v) => serde_json::from_value::<[f32; 3]>(v.clone())
+                .map(Vec3::from)
+                .map_err(|_| err(format!("{at}.sheenColorFactor: not three numbers")))?,
+        };
+        material.sheen_roughness = json_number(sheen, "sheenRoughnessFactor", &at)?;
+        material.sheen_color_texture =
+            self.json_texture_info(sheen, "sheenColorTexture", &at, true)?;
+        material.sheen_roughness_texture =
+            self.json_texture_info(sheen, "sheenRoughnessTexture", &at, false)?;
         Ok(())
     }
 
@@ -720,6 +762,7 @@ impl Loader<'_> {
         parent: &serde_json::Value,
         name: &str,
         at: &str,
+        srgb: bool,
     ) -> Result<Option<TextureRef>, SceneError> {
         let Some(value) = parent.get(name) else {
             return Ok(None);
@@ -738,7 +781,7 @@ impl Loader<'_> {
             .and_then(|e| e.texture_transform.as_ref());
         let parts = transform.map(|t| (t.offset.0, t.rotation.0, t.scale.0, t.tex_coord));
         let (transform, tex_coord) = self.transform(texture.index(), parts, info.tex_coord);
-        Ok(self.texture(&texture, tex_coord, transform, false))
+        Ok(self.texture(&texture, tex_coord, transform, srgb))
     }
 
     /// Decodes an image once, to RGBA8; None (with a warning) when it cannot be read.

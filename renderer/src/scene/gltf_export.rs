@@ -187,6 +187,12 @@ fn gltf_parts(desc: &SceneDescription) -> (Value, Vec<u8>) {
                     json!({"specularFactor": m.specular, "specularColorFactor": m.specular_color.to_array()}),
                 );
             }
+            if m.sheen_color.max_element() > 0.0 {
+                ext.insert(
+                    "KHR_materials_sheen".into(),
+                    json!({"sheenColorFactor": m.sheen_color.to_array(), "sheenRoughnessFactor": m.sheen_roughness}),
+                );
+            }
             if m.clearcoat > 0.0 {
                 ext.insert(
                     "KHR_materials_clearcoat".into(),
