@@ -25,10 +25,15 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_specular",
     "KHR_materials_clearcoat",
     "KHR_materials_sheen",
+    "KHR_draco_mesh_compression",
 ];
 
 /// Those of `SUPPORTED_EXTENSIONS` that the gltf crate does not parse: read from the JSON.
-const READ_FROM_JSON: &[&str] = &["KHR_materials_clearcoat", "KHR_materials_sheen"];
+const READ_FROM_JSON: &[&str] = &[
+    "KHR_materials_clearcoat",
+    "KHR_materials_sheen",
+    "KHR_draco_mesh_compression",
+];
 
 const MAX_NODE_DEPTH: usize = 256;
 
@@ -76,7 +81,7 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
     root.extensions_required
         .retain(|ext| !READ_FROM_JSON.contains(&ext.as_str()));
     // Validate after the extension check, so an unknown required extension is named as such.
-    let document = gltf::Document::from_json(root).map_err(validation_error)?;
+    let document = validated(root)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = load_buffers(&document, base, blob)?;
     check_views_and_accessors(&document, &buffers)?;
@@ -154,9 +159,7 @@ fn absorption(thickness: f32, color: [f32; 3], distance: f32) -> Vec3 {
 /// compress what we would otherwise read.
 fn what_to_do(ext: &str) -> &'static str {
     match ext {
-        "KHR_draco_mesh_compression" | "EXT_meshopt_compression" => {
-            ": export the model again without mesh compression"
-        }
+        "EXT_meshopt_compression" => ": export the model again without mesh compression",
         "KHR_texture_basisu" | "EXT_texture_webp" | "MSFT_texture_dds" => {
             ": export the model again with PNG or JPEG textures"
         }
@@ -186,6 +189,39 @@ fn parse(bytes: &[u8]) -> Result<(gltf::json::Root, Option<Vec<u8>>), SceneError
     }
     let root = serde_json::from_value(value).map_err(|e| invalid(&e))?;
     Ok((root, blob))
+}
+
+/// The document, once the gltf crate's validation finds nothing wrong with it other than
+/// what KHR_draco_mesh_compression allows: the accessors of a compressed primitive keep
+/// their count and type but need no buffer view (the data is in the bitstream).
+fn validated(root: gltf::json::Root) -> Result<gltf::Document, SceneError> {
+    use gltf::json::validation::{Error, Validate};
+    let mut compressed = std::collections::HashSet::new();
+    for primitive in root.meshes.iter().flat_map(|m| &m.primitives) {
+        let draco = primitive
+            .extensions
+            .as_ref()
+            .is_some_and(|e| e.others.contains_key("KHR_draco_mesh_compression"));
+        if draco {
+            compressed.extend(primitive.attributes.values().map(|a| a.value()));
+            compressed.extend(primitive.indices.as_ref().map(|a| a.value()));
+        }
+    }
+    let mut problems = Vec::new();
+    root.validate(&root, gltf::json::Path::new, &mut |path, error| {
+        let path = path();
+        let allowed = matches!(error, Error::Missing)
+            && compressed
+                .iter()
+                .any(|i| path.as_str() == format!("accessors[{i}].bufferView"));
+        if !allowed {
+            problems.push((path, error));
+        }
+    });
+    if !problems.is_empty() {
+        return Err(validation_error(gltf::Error::Validation(problems)));
+    }
+    Ok(gltf::Document::from_json_without_validation(root))
 }
 
 /// The first problem the validator found, with its JSON path, and how many more there are
@@ -335,6 +371,17 @@ fn check_sparse(
     Ok(())
 }
 
+/// A primitive's vertex attributes in the model's space, from accessors or a decoded Draco
+/// bitstream; indices None means the vertices in order.
+struct VertexData {
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    uvs: Option<Vec<Vec2>>,
+    uvs1: Option<Vec<Vec2>>,
+    colors: Option<Vec<Vec4>>,
+    indices: Option<Vec<u32>>,
+}
+
 struct Loader<'a> {
     document: &'a gltf::Document,
     buffers: &'a [gltf::buffer::Data],
@@ -480,27 +527,42 @@ impl Loader<'_> {
                 ));
                 continue;
             }
-            let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
-            let Some(positions) = reader.read_positions() else {
-                return Err(err(format!("{name}: primitive without POSITION")));
-            };
-            let mut positions: Vec<Vec3> = positions.map(Vec3::from).collect();
-            let mut normals: Option<Vec<Vec3>> =
-                reader.read_normals().map(|ns| ns.map(Vec3::from).collect());
-            for (target, &weight) in reader.read_morph_targets().zip(weights) {
-                if weight == 0.0 || !weight.is_finite() {
-                    continue;
-                }
-                let (dp, dn, _) = target;
-                for (p, d) in positions.iter_mut().zip(dp.into_iter().flatten()) {
-                    *p += weight * Vec3::from(d);
-                }
-                if let Some(normals) = normals.as_mut() {
-                    for (n, d) in normals.iter_mut().zip(dn.into_iter().flatten()) {
-                        *n += weight * Vec3::from(d);
+            let material = self.material(prim.material())?;
+            // The second set only where a texture reads it (files often carry lightmap
+            // coordinates we have no use for).
+            let want_uvs1 = self.desc.materials[material as usize]
+                .texture_refs()
+                .any(|r| r.tex_coord == 1);
+            let draco = prim.extension_value("KHR_draco_mesh_compression");
+            let data = match draco {
+                Some(ext) => {
+                    if weights.iter().any(|&w| w != 0.0) {
+                        self.desc.warnings.push(format!(
+                            "{name}: morph targets of a Draco-compressed primitive ignored"
+                        ));
+                    }
+                    let d = super::draco::decode(self.document, self.buffers, ext)
+                        .map_err(|e| err(format!("{name}: KHR_draco_mesh_compression: {e}")))?;
+                    let [uvs, uvs1] = d.tex_coords;
+                    VertexData {
+                        positions: d.positions,
+                        normals: d.normals,
+                        uvs,
+                        uvs1: uvs1.filter(|_| want_uvs1),
+                        colors: d.colors,
+                        indices: Some(d.indices),
                     }
                 }
-            }
+                None => self.read_accessors(&prim, weights, want_uvs1, &name)?,
+            };
+            let VertexData {
+                positions,
+                normals,
+                uvs,
+                uvs1,
+                colors,
+                indices,
+            } = data;
             let positions: Vec<Vec3> = positions
                 .into_iter()
                 .map(|p| world.transform_point3(p))
@@ -513,14 +575,10 @@ impl Loader<'_> {
                     .map(|n| (normal_matrix * n).normalize_or_zero())
                     .collect::<Vec<_>>()
             });
-            let uvs = reader
-                .read_tex_coords(0)
-                .map(|t| t.into_f32().map(Vec2::from).collect::<Vec<_>>());
-            let mut indices: Vec<u32> = match reader.read_indices() {
-                Some(i) => i.into_u32().collect(),
-                None => (0..positions.len() as u32).collect(),
-            };
+            let mut indices = indices.unwrap_or_else(|| (0..positions.len() as u32).collect());
+            // A Draco bitstream decodes to a triangle list whatever the mode says.
             match mode {
+                _ if draco.is_some() => {}
                 Mode::TriangleStrip => indices = strip_to_list(&indices),
                 Mode::TriangleFan => indices = fan_to_list(&indices),
                 _ => {}
@@ -537,19 +595,6 @@ impl Loader<'_> {
                     tri.swap(1, 2);
                 }
             }
-            let material = self.material(prim.material())?;
-            // The second set only where a texture reads it (files often carry lightmap
-            // coordinates we have no use for).
-            let uvs1 = self.desc.materials[material as usize]
-                .texture_refs()
-                .any(|r| r.tex_coord == 1)
-                .then(|| reader.read_tex_coords(1))
-                .flatten()
-                .map(|t| t.into_f32().map(Vec2::from).collect::<Vec<_>>());
-            // COLOR_0 is linear (spec 3.7.2.1); RGB colours have alpha 1.
-            let colors = reader
-                .read_colors(0)
-                .map(|c| c.into_rgba_f32().map(Vec4::from).collect::<Vec<_>>());
             self.desc.meshes.push(MeshDesc {
                 name: name.clone(),
                 positions,
@@ -562,6 +607,54 @@ impl Loader<'_> {
             });
         }
         Ok(())
+    }
+
+    /// A primitive's vertex attributes from its accessors, displaced by its morph targets at
+    /// `weights` (spec 3.7.2.2).
+    fn read_accessors(
+        &self,
+        prim: &gltf::Primitive,
+        weights: &[f32],
+        want_uvs1: bool,
+        name: &str,
+    ) -> Result<VertexData, SceneError> {
+        let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+        let Some(positions) = reader.read_positions() else {
+            return Err(err(format!("{name}: primitive without POSITION")));
+        };
+        let mut positions: Vec<Vec3> = positions.map(Vec3::from).collect();
+        let mut normals: Option<Vec<Vec3>> =
+            reader.read_normals().map(|ns| ns.map(Vec3::from).collect());
+        for (target, &weight) in reader.read_morph_targets().zip(weights) {
+            if weight == 0.0 || !weight.is_finite() {
+                continue;
+            }
+            let (dp, dn, _) = target;
+            for (p, d) in positions.iter_mut().zip(dp.into_iter().flatten()) {
+                *p += weight * Vec3::from(d);
+            }
+            if let Some(normals) = normals.as_mut() {
+                for (n, d) in normals.iter_mut().zip(dn.into_iter().flatten()) {
+                    *n += weight * Vec3::from(d);
+                }
+            }
+        }
+        let tex_coords = |set| {
+            reader
+                .read_tex_coords(set)
+                .map(|t| t.into_f32().map(Vec2::from).collect())
+        };
+        Ok(VertexData {
+            positions,
+            normals,
+            uvs: tex_coords(0),
+            uvs1: want_uvs1.then(|| tex_coords(1)).flatten(),
+            // COLOR_0 is linear (spec 3.7.2.1); RGB colours have alpha 1.
+            colors: reader
+                .read_colors(0)
+                .map(|c| c.into_rgba_f32().map(Vec4::from).collect()),
+            indices: reader.read_indices().map(|i| i.into_u32().collect()),
+        })
     }
 
     fn material(&mut self, m: gltf::Material) -> Result<u32, SceneError> {

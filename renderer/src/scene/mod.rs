@@ -4,6 +4,7 @@
 
 pub mod accel;
 mod build;
+mod draco;
 pub mod gltf;
 pub mod gltf_export;
 mod traversal;
