@@ -1192,3 +1192,25 @@ fn draco_compressed_primitives_load_as_the_meshes_they_encode() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A normal texture's KHR_texture_transform (which the gltf crate does not read there) is
+/// read like any other texture's: the map and the texCoord override, and the tangent frame
+/// follows the transformed coordinates (`Scene::intersect`).
+#[test]
+fn a_normal_texture_reads_its_texture_transform() {
+    let dir = temp_dir("normal-transform");
+    image::RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255]))
+        .save(dir.join("flat.png"))
+        .unwrap();
+    let mut v = to_gltf(&cornell_box(false));
+    v["images"] = json!([{"uri": "flat.png"}]);
+    v["textures"] = json!([{"source": 0}]);
+    v["materials"][0]["normalTexture"] = json!({"index": 0, "scale": 0.5,
+        "extensions": {"KHR_texture_transform": {"offset": [0.5, 0.0], "scale": [2.0, 4.0], "texCoord": 1}}});
+    v["extensionsUsed"] = json!(["KHR_texture_transform"]);
+    let desc = load_description(&write_json(&dir, "normal.gltf", &v)).unwrap();
+    let (r, scale) = desc.materials[0].normal_texture.unwrap();
+    assert_eq!((r.tex_coord, scale), (1, 0.5));
+    assert_eq!(r.uv(&[Vec2::ZERO, Vec2::new(0.25, 0.25)]), Vec2::new(1.0, 1.0));
+    std::fs::remove_dir_all(dir).unwrap();
+}

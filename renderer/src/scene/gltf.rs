@@ -768,10 +768,23 @@ impl Loader<'_> {
                 "material '{label}': invalid KHR_materials_specular specularColorFactor"
             )));
         }
-        material.normal_texture = m.normal_texture().and_then(|t| {
-            self.texture(&t.texture(), t.tex_coord(), Affine2::IDENTITY, false)
-                .map(|r| (r, t.scale()))
-        });
+        if let Some(t) = m.normal_texture() {
+            // The gltf crate reads no transform on a normal texture: take the JSON's.
+            let transform = t
+                .extension_value("KHR_texture_transform")
+                .and_then(|v| {
+                    serde_json::from_value::<gltf::json::extensions::texture::TextureTransform>(
+                        v.clone(),
+                    )
+                    .ok()
+                })
+                .map(|t| (t.offset.0, t.rotation.0, t.scale.0, t.tex_coord));
+            let (transform, tex_coord) =
+                self.transform(t.texture().index(), transform, t.tex_coord());
+            material.normal_texture = self
+                .texture(&t.texture(), tex_coord, transform, false)
+                .map(|r| (r, t.scale()));
+        }
         if m.unlit() {
             // KHR_materials_unlit asks for the base colour as it stands, whatever the light: a
             // path tracer shows that as a black surface emitting its base colour (which then
