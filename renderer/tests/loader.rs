@@ -1211,6 +1211,9 @@ fn a_normal_texture_reads_its_texture_transform() {
     let desc = load_description(&write_json(&dir, "normal.gltf", &v)).unwrap();
     let (r, scale) = desc.materials[0].normal_texture.unwrap();
     assert_eq!((r.tex_coord, scale), (1, 0.5));
-    assert_eq!(r.uv(&[Vec2::ZERO, Vec2::new(0.25, 0.25)]), Vec2::new(1.0, 1.0));
+    assert_eq!(
+        r.uv(&[Vec2::ZERO, Vec2::new(0.25, 0.25)]),
+        Vec2::new(1.0, 1.0)
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }

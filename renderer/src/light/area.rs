@@ -26,6 +26,18 @@ pub struct AreaLight {
     pub two_sided: bool,
     /// Mean emitted radiance, for the power estimate.
     pub mean_radiance: Vec3,
+    /// Where the material is an alphaMode MASK cut-out: the light emits only where the
+    /// surface is (rays pass through the rest, so nothing there could emit).
+    pub cutout: Option<Cutout>,
+}
+
+/// An emitter's alpha (baseColorFactor's alpha times its base colour texture's) and cutoff.
+/// Vertex colours' alpha is not read here: emitters cut out by vertex alpha emit everywhere.
+#[derive(Clone, Copy, Debug)]
+pub struct Cutout {
+    pub alpha: f32,
+    pub texture: Option<TextureRef>,
+    pub cutoff: f32,
 }
 
 impl AreaLight {
@@ -33,6 +45,14 @@ impl AreaLight {
     pub fn l(&self, textures: &[Texture], uv: &TexCoords, w: Vec3) -> Vec3 {
         if !self.two_sided && self.normal.dot(w) <= 0.0 {
             return Vec3::ZERO;
+        }
+        if let Some(c) = &self.cutout {
+            let alpha = c
+                .texture
+                .and_then(|t| Some(textures.get(t.texture as usize)?.lookup(t.uv(uv)).w));
+            if c.alpha * alpha.unwrap_or(1.0) < c.cutoff {
+                return Vec3::ZERO;
+            }
         }
         let texture = self
             .emissive_texture

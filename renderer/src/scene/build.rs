@@ -10,7 +10,7 @@ use super::{NO_LIGHT, PunctualLightDesc, Scene, SceneDescription, SceneError, Sc
 use crate::camera::CameraDesc;
 use crate::geometry::{Bounds3, Frame};
 use crate::light::Light;
-use crate::light::area::AreaLight;
+use crate::light::area::{AreaLight, Cutout};
 use crate::light::environment::UniformEnvironment;
 use crate::light::punctual::{DirectionalLight, PointLight, SpotLight};
 use crate::light::sampler::PowerLightSampler;
@@ -313,6 +313,14 @@ fn area_lights(
             normal: cross.normalize(),
             two_sided: m.double_sided,
             mean_radiance: mean,
+            cutout: match m.alpha_mode {
+                AlphaMode::Mask(cutoff) => Some(Cutout {
+                    alpha: m.alpha,
+                    texture: m.base_color_texture,
+                    cutoff,
+                }),
+                _ => None,
+            },
         }));
     }
     (lights, triangle_light)

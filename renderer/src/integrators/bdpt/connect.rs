@@ -191,7 +191,7 @@ fn mis_weight(
     let remap0 = |f: f32| if f != 0.0 { f } else { 1.0 };
     let qs = match s {
         0 => None,
-        1 => sampled.or(Some(&light_path[0])),
+        1 => sampled.or(light_path.first()),
         _ => Some(&light_path[s - 1]),
     };
     let pt = if t == 1 {

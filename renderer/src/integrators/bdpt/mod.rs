@@ -80,7 +80,9 @@ impl PixelEstimator for BdptSettings {
         walker.light_subpath(max_depth + 1, light_path);
         let mut l = Vec3::ZERO;
         for t in 1..=camera_path.len() {
-            for s in 0..=light_path.len() {
+            // s = 1 samples its own light vertex: it is there even when the light subpath
+            // is not (its origin fell on a black texel or a cut-out's hole).
+            for s in 0..=light_path.len().max(1) {
                 let depth = (s + t) as i64 - 2;
                 if (s == 1 && t == 1) || depth < 0 || depth > max_depth as i64 {
                     continue;

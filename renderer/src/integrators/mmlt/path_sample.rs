@@ -161,7 +161,8 @@ pub fn evaluate(
     }
     walker.sampler.start_stream(LIGHT_STREAM, 0);
     walker.light_subpath(s, &mut scratch.light);
-    if scratch.light.len() != s {
+    // s = 1 samples its own light vertex, whether or not the subpath's origin emits.
+    if s != 1 && scratch.light.len() != s {
         return zero;
     }
     sampler.start_stream(CONNECTION_STREAM, 1);
