@@ -355,15 +355,25 @@ fn uniform_environment_on_a_sheen_plane() {
 /// base colour texture's alpha 0 on the half x < 0 and 1 on the other (bilinear alpha crosses
 /// the cutoff 0.5 at x = 0), lights the point below its centre with half the square's
 /// irradiance, by symmetry; so does the same square whose emissive texture is black on that
-/// half. Every strategy must agree: hitting the light (only where it is), sampling a point on
-/// it (none in the hole) and leaving it (light paths start only where it is). BDPT once lost
+/// half, and the whole square with alphaMode BLEND at alpha 0.5 (there half the time). Every
+/// strategy must agree: hitting the light (only where it is), sampling a point on it (none in
+/// the hole; weighted by alpha when blended) and leaving it (light paths start only where it
+/// is, or carry alpha). BDPT once lost
 /// its s = 1 strategy whenever the light subpath's origin fell where nothing is emitted,
 /// which this caught (0.22 for 0.35).
 #[test]
 fn a_half_masked_or_half_black_area_light_lights_with_half_the_square() {
     use caustica_renderer::material::AlphaMode;
-    for (name, alpha_cut) in [("alpha-masked", true), ("half-black", false)] {
-        let desc = half_square_light(alpha_cut);
+    for (name, alpha_cut, blend) in [
+        ("alpha-masked", true, false),
+        ("half-black", false, false),
+        ("blended at alpha 0.5", false, true),
+    ] {
+        let mut desc = half_square_light(alpha_cut);
+        if blend {
+            let m = desc.materials.last_mut().unwrap();
+            (m.emissive_texture, m.alpha, m.alpha_mode) = (None, 0.5, AlphaMode::Blend);
+        }
         let (rho, le, a, h) = (0.7f64, 3.0f64, 0.5f64, 0.8f64);
         let exact = rho / PI * square_irradiance(le, a, h) / 2.0;
         assert_close(name, render_mean(desc, 64), exact);

@@ -5,7 +5,7 @@
 
 use crate::geometry::{interpolate2, interpolate3};
 use crate::light::{LightLiSample, LightSampleContext};
-use crate::material::TextureRef;
+use crate::material::{AlphaMode, TextureRef};
 use crate::sampling::warp::sample_uniform_triangle;
 use crate::texture::{TexCoords, Texture};
 use glam::{Vec2, Vec3};
@@ -26,18 +26,28 @@ pub struct AreaLight {
     pub two_sided: bool,
     /// Mean emitted radiance, for the power estimate.
     pub mean_radiance: Vec3,
-    /// Where the material is an alphaMode MASK cut-out: the light emits only where the
+    /// Where the material's alphaMode is MASK or BLEND: the light emits only where the
     /// surface is (rays pass through the rest, so nothing there could emit).
     pub cutout: Option<Cutout>,
 }
 
-/// An emitter's alpha (baseColorFactor's alpha times its base colour texture's) and cutoff.
-/// Vertex colours' alpha is not read here: emitters cut out by vertex alpha emit everywhere.
+/// An emitter's alpha (baseColorFactor's alpha times its base colour texture's) and mode
+/// (MASK or BLEND). Vertex colours' alpha is not read here: emitters cut out by vertex alpha
+/// emit everywhere.
 #[derive(Clone, Copy, Debug)]
 pub struct Cutout {
     pub alpha: f32,
     pub texture: Option<TextureRef>,
-    pub cutoff: f32,
+    pub mode: AlphaMode,
+}
+
+impl Cutout {
+    fn alpha_at(&self, textures: &[Texture], uv: &TexCoords) -> f32 {
+        let texture = self
+            .texture
+            .and_then(|t| Some(textures.get(t.texture as usize)?.lookup(t.uv(uv)).w));
+        self.alpha * texture.unwrap_or(1.0)
+    }
 }
 
 impl AreaLight {
@@ -46,18 +56,27 @@ impl AreaLight {
         if !self.two_sided && self.normal.dot(w) <= 0.0 {
             return Vec3::ZERO;
         }
-        if let Some(c) = &self.cutout {
-            let alpha = c
-                .texture
-                .and_then(|t| Some(textures.get(t.texture as usize)?.lookup(t.uv(uv)).w));
-            if c.alpha * alpha.unwrap_or(1.0) < c.cutoff {
-                return Vec3::ZERO;
-            }
+        if let Some(c) = &self.cutout
+            && let AlphaMode::Mask(cutoff) = c.mode
+            && c.alpha_at(textures, uv) < cutoff
+        {
+            return Vec3::ZERO;
         }
         let texture = self
             .emissive_texture
             .and_then(|t| Some((textures.get(t.texture as usize)?, t.uv(uv))));
         self.emission * texture.map_or(Vec3::ONE, |(t, uv)| t.lookup(uv).truncate())
+    }
+
+    /// Radiance leaving a point that was sampled on the light rather than hit: a BLEND
+    /// emitter is there with probability alpha, which a hit has already decided and a
+    /// sample must weigh in, so that both estimate alpha Le.
+    pub fn l_sampled(&self, textures: &[Texture], uv: &TexCoords, w: Vec3) -> Vec3 {
+        let l = self.l(textures, uv, w);
+        match &self.cutout {
+            Some(c) if c.mode == AlphaMode::Blend => l * c.alpha_at(textures, uv).clamp(0.0, 1.0),
+            _ => l,
+        }
     }
 
     /// The point and texture coordinates at barycentric coordinates `b`.
@@ -86,7 +105,7 @@ impl AreaLight {
             return None;
         }
         let pdf = dist2 / (cos_light * self.area);
-        let l = self.l(textures, &uv, -wi);
+        let l = self.l_sampled(textures, &uv, -wi);
         if l == Vec3::ZERO || !pdf.is_finite() {
             return None;
         }

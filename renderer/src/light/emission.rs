@@ -78,7 +78,7 @@ pub fn sample_le(
             };
             let local = sample_cosine_hemisphere(u_dir);
             let d = Frame::from_z(n).from_local(local);
-            let le = a.l(&scene.textures, &uv, d);
+            let le = a.l_sampled(&scene.textures, &uv, d);
             let p_error = crate::scene::triangle::hit_point_and_error(&a.positions, b).1;
             (le.max_element() > 0.0 && local.z > 0.0).then(|| EmittedRay {
                 ray: Ray::new(offset_ray_origin(p, p_error, n, d), d),

@@ -313,14 +313,11 @@ fn area_lights(
             normal: cross.normalize(),
             two_sided: m.double_sided,
             mean_radiance: mean,
-            cutout: match m.alpha_mode {
-                AlphaMode::Mask(cutoff) => Some(Cutout {
-                    alpha: m.alpha,
-                    texture: m.base_color_texture,
-                    cutoff,
-                }),
-                _ => None,
-            },
+            cutout: (m.alpha_mode != AlphaMode::Opaque).then_some(Cutout {
+                alpha: m.alpha,
+                texture: m.base_color_texture,
+                mode: m.alpha_mode,
+            }),
         }));
     }
     (lights, triangle_light)
