@@ -150,6 +150,14 @@ fn square_area_light_on_a_diffuse_plane() {
     }
 }
 
+/// An 8 x 8 sRGB texture of texels `left` where u < 0.5 and `right` elsewhere.
+fn half_texture(left: [u8; 4], right: [u8; 4]) -> Texture {
+    let texels: Vec<u8> = (0..64)
+        .flat_map(|i| if i % 8 < 4 { left } else { right })
+        .collect();
+    Texture::from_rgba8(8, 8, &texels, true, Wrap::ClampToEdge, Wrap::ClampToEdge)
+}
+
 #[test]
 fn textured_area_light_whose_black_triangles_are_no_lights() {
     // The square light of the test above, its emission from the white half of a texture that
@@ -158,17 +166,7 @@ fn textured_area_light_whose_black_triangles_are_no_lights() {
     // plane's radiance is still the square's closed form.
     let (rho, le, a, h) = (0.7f32, 3.0f32, 0.5f32, 0.8f32);
     let mut desc = plane_scene(Material::diffuse(Vec3::splat(rho)));
-    let texels: Vec<u8> = (0..64)
-        .flat_map(|i| if i % 8 < 4 { [0, 0, 0, 255] } else { [255; 4] })
-        .collect();
-    desc.textures = vec![Texture::from_rgba8(
-        8,
-        8,
-        &texels,
-        true,
-        Wrap::ClampToEdge,
-        Wrap::ClampToEdge,
-    )];
+    desc.textures = vec![half_texture([0, 0, 0, 255], [255; 4])];
     desc.materials.push(Material {
         emission: Vec3::splat(le),
         emissive_texture: Some(TextureRef::new(0)),
@@ -285,15 +283,18 @@ fn uniform_environment_on_diffuse_and_glossy_planes() {
     );
 }
 
-/// KHR_materials_clearcoat and KHR_materials_specular under the environment of radiance 1: a
+/// KHR_materials_clearcoat, _specular and _sheen under the environment of radiance 1: a
 /// plane of clearcoat c over a base that reflects nothing (black, specular 0) reflects the
 /// coat lobe's albedo c E(mu_o) at f0 = 0.04; a black plastic whose specular layer has
 /// specularFactor s and specularColorFactor k reflects that layer's albedo E(mu_o) at
-/// f0 = min(0.04 k, 1) s, f90 = s (the red channel here). E comes from the layering tables,
-/// which a unit test checks against their quadrature.
+/// f0 = min(0.04 k, 1) s, f90 = s (the red channel here); a sheen of colour C over a base that
+/// reflects nothing reflects C E_sheen(mu_o). The specular E comes from the layering tables,
+/// which a unit test checks against their quadrature, the sheen's from its table, checked
+/// against Monte Carlo integration.
 #[test]
-fn uniform_environment_on_coated_and_specular_planes() {
+fn uniform_environment_on_layered_planes() {
     use caustica_renderer::material::layering::specular_albedo;
+    use caustica_renderer::material::sheen;
     let mu_o = EYE.normalize().y;
     let coat = Material {
         base_color: Vec3::ZERO,
@@ -322,26 +323,15 @@ fn uniform_environment_on_coated_and_specular_planes() {
     let exact = specular_albedo(mu_o, 0.16, f0, 0.7).x;
     assert_close(
         "environment, tinted specular",
-        render_mean(plane_scene(tinted), 64),
+        render_mean(plane_scene(tinted.clone()), 64),
         exact as f64,
     );
-}
-
-/// KHR_materials_sheen under the environment of radiance 1: a sheen of colour C over a base
-/// that reflects nothing reflects C E(mu_o), E the sheen lobe's albedo (its table is checked
-/// against Monte Carlo integration in a unit test).
-#[test]
-fn uniform_environment_on_a_sheen_plane() {
-    use caustica_renderer::material::sheen;
-    let mu_o = EYE.normalize().y;
     let velvet = Material {
-        base_color: Vec3::ZERO,
-        metallic: 0.0,
-        roughness: 1.0,
         specular: 0.0,
+        specular_color: Vec3::ONE,
         sheen_color: Vec3::new(0.9, 0.5, 0.2),
         sheen_roughness: 0.5,
-        ..Default::default()
+        ..tinted
     };
     let exact = 0.9 * sheen::albedo(mu_o, 0.5);
     assert_close(
@@ -383,22 +373,11 @@ fn a_half_masked_or_half_black_area_light_lights_with_half_the_square() {
     fn half_square_light(alpha_cut: bool) -> SceneDescription {
         let (rho, le, a, h) = (0.7f32, 3.0f32, 0.5f32, 0.8f32);
         let mut desc = plane_scene(Material::diffuse(Vec3::splat(rho)));
-        let texels: Vec<u8> = (0..64)
-            .flat_map(|i| match (i % 8 < 4, alpha_cut) {
-                (true, true) => [0, 0, 0, 0],
-                (false, true) => [0, 0, 0, 255],
-                (true, false) => [0, 0, 0, 255],
-                (false, false) => [255; 4],
-            })
-            .collect();
-        desc.textures = vec![Texture::from_rgba8(
-            8,
-            8,
-            &texels,
-            true,
-            Wrap::ClampToEdge,
-            Wrap::ClampToEdge,
-        )];
+        desc.textures = vec![if alpha_cut {
+            half_texture([0; 4], [0, 0, 0, 255])
+        } else {
+            half_texture([0, 0, 0, 255], [255; 4])
+        }];
         desc.materials.push(if alpha_cut {
             Material {
                 emission: Vec3::splat(le),

@@ -371,6 +371,9 @@ fn check_sparse(
     Ok(())
 }
 
+/// KHR_texture_transform's (offset, rotation, scale, texCoord).
+type TransformParts = ([f32; 2], f32, [f32; 2], Option<u32>);
+
 /// A primitive's vertex attributes in the model's space, from accessors or a decoded Draco
 /// bitstream; indices None means the vertices in order.
 struct VertexData {
@@ -930,7 +933,7 @@ impl Loader<'_> {
     fn transform(
         &mut self,
         texture: usize,
-        parts: Option<([f32; 2], f32, [f32; 2], Option<u32>)>,
+        parts: Option<TransformParts>,
         tex_coord: u32,
     ) -> (Affine2, u32) {
         let Some((offset, rotation, scale, set)) = parts else {
