@@ -150,6 +150,7 @@ impl Camera {
 
     /// Film position (pixels) to the point on the film rectangle in camera space: at distance
     /// 1 for the pinhole, at z = 0 for the orthographic camera.
+    #[inline]
     fn film_point(&self, film: Vec2) -> Vec3 {
         let ndc_x = 2.0 * film.x / self.width as f32 - 1.0;
         let ndc_y = 1.0 - 2.0 * film.y / self.height as f32;
@@ -177,6 +178,7 @@ impl Camera {
     }
 
     /// Primary ray through continuous film position `film` (pixels).
+    #[inline]
     pub fn generate_ray(&self, film: Vec2) -> Ray {
         let on_film = self.film_point(film);
         if self.orthographic {

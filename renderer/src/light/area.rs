@@ -27,8 +27,9 @@ pub struct AreaLight {
     /// Mean emitted radiance, for the power estimate.
     pub mean_radiance: Vec3,
     /// Where the material's alphaMode is MASK or BLEND: the light emits only where the
-    /// surface is (rays pass through the rest, so nothing there could emit).
-    pub cutout: Option<Cutout>,
+    /// surface is (rays pass through the rest, so nothing there could emit). Boxed: most
+    /// lights have none, and every light is as large as the largest kind.
+    pub cutout: Option<Box<Cutout>>,
 }
 
 /// An emitter's alpha (baseColorFactor's alpha times its base colour texture's) and mode

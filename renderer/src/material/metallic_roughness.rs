@@ -57,10 +57,10 @@ pub struct MetallicRoughnessBsdf {
     pub transmission: f32,
     pub eta: f32,
     pub distrib: TrowbridgeReitz,
-    /// KHR_materials_specular's specularFactor (times its texture's alpha): 1 is glTF's layer.
-    pub specular: f32,
-    /// KHR_materials_specular's specularColorFactor (times its texture).
-    pub specular_color: Vec3,
+    /// The plastic's specular reflectance at normal and grazing incidence, from `ior` and
+    /// KHR_materials_specular (`dielectric_reflectance`).
+    pub specular_f0: Vec3,
+    pub specular_f90: f32,
     pub coat: Clearcoat,
     pub sheen: Sheen,
 }
@@ -89,12 +89,16 @@ impl MetallicRoughnessBsdf {
         }
     }
 
-    /// The plastic component's specular reflectance at normal and grazing incidence
-    /// (KHR_materials_specular; (f0 of ior, 1) without it).
+    /// The plastic component's specular reflectance (f0, f90) for index `eta` and
+    /// KHR_materials_specular's factor and colour ((f0 of ior, 1) for 1 and white).
+    pub fn dielectric_reflectance(eta: f32, specular: f32, specular_color: Vec3) -> (Vec3, f32) {
+        let f0_ior = ((eta - 1.0) / (eta + 1.0)).powi(2);
+        let f0 = (f0_ior * specular_color).min(Vec3::ONE) * specular;
+        (f0, specular)
+    }
+
     fn dielectric_f0_f90(&self) -> (Vec3, f32) {
-        let f0_ior = ((self.eta - 1.0) / (self.eta + 1.0)).powi(2);
-        let f0 = (f0_ior * self.specular_color).min(Vec3::ONE) * self.specular;
-        (f0, self.specular)
+        (self.specular_f0, self.specular_f90)
     }
 
     /// Probability of the specular lobe within the dielectric (plastic) component: the

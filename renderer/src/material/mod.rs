@@ -358,6 +358,12 @@ impl Material {
                 let roughness = (self.roughness * mr.y).clamp(0.0, 1.0);
                 let metallic = (self.metallic * mr.z).clamp(0.0, 1.0);
                 let rgba = |t| Self::texture_rgba(textures, t, uv);
+                let (specular_f0, specular_f90) = MetallicRoughnessBsdf::dielectric_reflectance(
+                    self.ior,
+                    (self.specular * rgba(self.specular_texture).w).clamp(0.0, 1.0),
+                    (self.specular_color * rgba(self.specular_color_texture).truncate())
+                        .max(Vec3::ZERO),
+                );
                 let coat = if self.clearcoat > 0.0 {
                     let weight = self.clearcoat * rgba(self.clearcoat_texture).x;
                     let roughness =
@@ -376,10 +382,8 @@ impl Material {
                     transmission: self.transmission.clamp(0.0, 1.0),
                     eta: self.ior,
                     distrib: TrowbridgeReitz::new(roughness * roughness),
-                    specular: (self.specular * rgba(self.specular_texture).w).clamp(0.0, 1.0),
-                    specular_color: (self.specular_color
-                        * rgba(self.specular_color_texture).truncate())
-                    .max(Vec3::ZERO),
+                    specular_f0,
+                    specular_f90,
                     coat,
                     sheen: if self.sheen_color.max_element() > 0.0 {
                         Sheen::new(
@@ -397,14 +401,16 @@ impl Material {
 
 /// A rough dielectric interface (glTF: transmission 1, metallic 0, roughness sqrt(alpha)).
 pub fn rough_dielectric(eta: f32, alpha: f32) -> Bsdf {
+    let (specular_f0, specular_f90) =
+        MetallicRoughnessBsdf::dielectric_reflectance(eta, 1.0, Vec3::ONE);
     Bsdf::MetallicRoughness(MetallicRoughnessBsdf {
         base_color: Vec3::ONE,
         metallic: 0.0,
         transmission: 1.0,
         eta,
         distrib: TrowbridgeReitz::new(alpha),
-        specular: 1.0,
-        specular_color: Vec3::ONE,
+        specular_f0,
+        specular_f90,
         coat: Clearcoat::NONE,
         sheen: Sheen::NONE,
     })

@@ -21,8 +21,8 @@ fn mr(base: Vec3, metallic: f32, roughness: f32, transmission: f32) -> Bsdf {
         transmission,
         eta: 1.5,
         distrib: TrowbridgeReitz::new(roughness * roughness),
-        specular: 1.0,
-        specular_color: Vec3::ONE,
+        specular_f0: Vec3::splat(0.04),
+        specular_f90: 1.0,
         coat: clearcoat::Clearcoat::NONE,
         sheen: sheen::Sheen::NONE,
     })
@@ -44,9 +44,11 @@ fn with_specular(bsdf: Bsdf, specular: f32, specular_color: Vec3) -> Bsdf {
     let Bsdf::MetallicRoughness(b) = bsdf else {
         unreachable!("layers belong to the metallic-roughness BSDF")
     };
+    let (specular_f0, specular_f90) =
+        MetallicRoughnessBsdf::dielectric_reflectance(b.eta, specular, specular_color);
     Bsdf::MetallicRoughness(MetallicRoughnessBsdf {
-        specular,
-        specular_color,
+        specular_f0,
+        specular_f90,
         ..b
     })
 }

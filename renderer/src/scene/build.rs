@@ -313,10 +313,12 @@ fn area_lights(
             normal: cross.normalize(),
             two_sided: m.double_sided,
             mean_radiance: mean,
-            cutout: (m.alpha_mode != AlphaMode::Opaque).then_some(Cutout {
-                alpha: m.alpha,
-                texture: m.base_color_texture,
-                mode: m.alpha_mode,
+            cutout: (m.alpha_mode != AlphaMode::Opaque).then(|| {
+                Box::new(Cutout {
+                    alpha: m.alpha,
+                    texture: m.base_color_texture,
+                    mode: m.alpha_mode,
+                })
             }),
         }));
     }
