@@ -46,8 +46,9 @@ impl CameraDesc {
         }
     }
 
-    /// The default camera for a scene without one (DESIGN.md section 2): looking down -Z at
-    /// the centre of the bounds from far enough that the bounding sphere fits a 45 degree view.
+    /// The default camera for a scene without one (DESIGN.md section 2): looking at the
+    /// centre of the bounds from `framing_direction`, far enough that the bounding sphere
+    /// fits a 45 degree view, upright (+Y up, no roll).
     pub fn framing(bounds: &Bounds3) -> CameraDesc {
         let (center, radius) = bounds.bounding_sphere();
         let yfov = 45f32.to_radians();
@@ -57,10 +58,19 @@ impl CameraDesc {
             1.0
         };
         let distance = radius / (yfov / 2.0).sin();
-        CameraDesc::perspective(
-            Affine3A::from_translation(center + Vec3::Z * distance),
-            yfov,
-        )
+        let extent = bounds.max - bounds.min;
+        let direction = framing_direction(if extent.is_finite() {
+            extent
+        } else {
+            Vec3::ONE
+        });
+        let eye = center + direction * distance;
+        // Columns: right, up, and the camera's +Z, which points away from what it looks at
+        // (`framing_direction` is never near vertical, so +Y gives the right a direction).
+        let back = direction;
+        let right = Vec3::Y.cross(back).normalize();
+        let rotation = glam::Mat3::from_cols(right, back.cross(right), back);
+        CameraDesc::perspective(Affine3A::from_mat3_translation(rotation, eye), yfov)
     }
 
     /// The height of one pixel (of `height` rows) on a surface at `distance` facing the camera.
@@ -73,6 +83,34 @@ impl CameraDesc {
         };
         film_height / height.max(1) as f64
     }
+}
+
+/// Where the default camera sits, as a unit direction from the model's centre: a
+/// three-quarter view from the model's front (+Z, glTF's forward), 30 degrees to its right and
+/// 25 degrees above. A flat model (its thinnest extent under a tenth of its largest: terrain,
+/// a floor plan, a picture) is seen from its flat side instead, 30 degrees off its normal, so
+/// that it is never seen edge-on: from above for one lying in the ground plane, from the
+/// front and a little above otherwise.
+pub fn framing_direction(extent: Vec3) -> Vec3 {
+    let (azimuth, elevation) = (30f32.to_radians(), 25f32.to_radians());
+    let three_quarter = Vec3::new(
+        azimuth.sin() * elevation.cos(),
+        elevation.sin(),
+        azimuth.cos() * elevation.cos(),
+    );
+    let thinnest = extent.min_element();
+    if !(thinnest < 0.1 * extent.max_element()) {
+        return three_quarter;
+    }
+    let tilt = 30f32.to_radians();
+    let (normal, toward) = if extent.y == thinnest {
+        (Vec3::Y, Vec3::Z)
+    } else if extent.z == thinnest {
+        (Vec3::Z, Vec3::Y)
+    } else {
+        (Vec3::X, Vec3::Y)
+    };
+    (normal * tilt.cos() + toward * tilt.sin()).normalize()
 }
 
 /// A camera at an output resolution (pbrt's `Camera`).
@@ -473,5 +511,54 @@ mod tests {
         assert!((s.raster - Vec2::new(60.0, 40.0)).length() < 1e-3);
         assert!((s.p_camera - b.o).length() < 1e-4 && (s.dist - 2.5).abs() < 1e-4);
         assert!(cam.raster_of_point(b.o - b.d).is_none(), "behind the film");
+    }
+
+    /// The default camera frames the whole bounding sphere, upright, looking at its centre:
+    /// from the front, right and above for a box, from above for a flat model lying in the
+    /// ground plane, from the front for a flat one standing up, never edge-on.
+    #[test]
+    fn the_default_camera_frames_the_model_upright_and_never_edge_on() {
+        for (extent, seen_along) in [
+            (Vec3::new(2.0, 1.0, 1.5), None),
+            (Vec3::new(40.0, 0.5, 30.0), Some(Vec3::NEG_Y)),
+            (Vec3::new(2.0, 2.0, 0.01), Some(Vec3::NEG_Z)),
+            (Vec3::new(0.0, 3.0, 1.0), Some(Vec3::NEG_X)),
+        ] {
+            let min = Vec3::new(1.0, -2.0, 0.5);
+            let bounds = Bounds3 {
+                min,
+                max: min + extent,
+            };
+            let desc = CameraDesc::framing(&bounds);
+            let cam = Camera::new(&desc, 64, 64);
+            let (center, radius) = bounds.bounding_sphere();
+            let to_center = (center - cam.position()).normalize();
+            assert!((cam.forward() - to_center).length() < 1e-4, "{extent}");
+            // The sphere fits the 45 degree view: its angular radius is at most 22.5 degrees.
+            let angular = (radius / (center - cam.position()).length()).asin();
+            assert!(
+                angular <= 22.5f32.to_radians() + 1e-4,
+                "{extent}: {angular}"
+            );
+            // Upright: the camera's right is horizontal and its up points up.
+            let right = cam.camera_to_world.transform_vector3(Vec3::X);
+            let up = cam.camera_to_world.transform_vector3(Vec3::Y);
+            assert!(
+                right.y.abs() < 1e-4 && up.y > 0.0,
+                "{extent}: right {right}, up {up}"
+            );
+            match seen_along {
+                None => assert!(
+                    cam.forward().y < -0.3 && cam.forward().z < -0.5 && cam.forward().x < -0.2,
+                    "a three-quarter view from the front, right and above: {}",
+                    cam.forward()
+                ),
+                Some(normal) => assert!(
+                    cam.forward().dot(normal) > 0.85,
+                    "{extent}: seen along {normal}, forward {}",
+                    cam.forward()
+                ),
+            }
+        }
     }
 }
