@@ -1217,3 +1217,27 @@ fn a_normal_texture_reads_its_texture_transform() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A camera enclosed by a mesh (a skybox, a room without lamps) in a scene whose only light
+/// is the default environment sees nothing lit: the build says so, naming the material. Not
+/// when a light is inside, nor when the camera is outside.
+#[test]
+fn an_enclosed_camera_without_light_inside_is_named_in_a_warning() {
+    use caustica_renderer::procedural::sphere_with_point_light;
+    use caustica_renderer::scene::Scene;
+    let enclosed = |desc: SceneDescription| {
+        Scene::build(desc)
+            .unwrap()
+            .info
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("the camera is enclosed") && w.contains("'sky'"))
+    };
+    let mut sky = sphere_with_point_light(32);
+    sky.materials[0] = sky.materials[0].clone().named("sky");
+    assert!(!enclosed(sky.clone()), "a light inside: nothing to say");
+    sky.lights.clear();
+    assert!(enclosed(sky.clone()));
+    sky.camera = None;
+    assert!(!enclosed(sky), "the default camera is outside the model");
+}

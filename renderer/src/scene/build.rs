@@ -110,7 +110,7 @@ impl Scene {
             load_time: Duration::ZERO,
             bvh_build_time: start.elapsed(),
         };
-        Ok(Scene {
+        let mut scene = Scene {
             positions,
             attributes,
             uvs1,
@@ -125,8 +125,43 @@ impl Scene {
             bounds,
             info,
             accel,
-        })
+        };
+        if default_environment && let Some(warning) = enclosure_warning(&scene) {
+            scene.info.warnings.push(warning);
+        }
+        Ok(scene)
     }
+}
+
+/// Directions from the camera that must all meet a surface for it to count as enclosed.
+const ENCLOSURE_RAYS: u32 = 256;
+
+/// When the only light is the default environment, whose light comes from outside, and the
+/// camera is enclosed (every one of `ENCLOSURE_RAYS` directions spread over the sphere meets
+/// a surface: a skybox mesh, a closed room without lamps), no light reaches what it sees: the
+/// image is black. Says so, naming the material most of those rays meet.
+fn enclosure_warning(scene: &Scene) -> Option<String> {
+    let eye = Vec3::from(scene.camera.camera_to_world.translation);
+    let mut hits: HashMap<u32, u32> = HashMap::new();
+    for i in 0..ENCLOSURE_RAYS {
+        // A Fibonacci lattice: evenly spread, deterministic.
+        let z = 1.0 - (2.0 * i as f32 + 1.0) / ENCLOSURE_RAYS as f32;
+        let phi = i as f32 * std::f32::consts::PI * (3.0 - 5f32.sqrt());
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let ray = crate::geometry::Ray::new(eye, Vec3::new(r * phi.cos(), r * phi.sin(), z));
+        let si = scene.intersect(&ray)?;
+        let material = scene.attributes[si.triangle as usize].material;
+        *hits.entry(material).or_default() += 1;
+    }
+    let (&material, _) = hits
+        .iter()
+        .max_by_key(|(m, n)| (**n, std::cmp::Reverse(**m)))?;
+    let name = &scene.materials[material as usize].name;
+    Some(format!(
+        "the camera is enclosed (every direction from it meets a surface, mostly material \
+         '{name}') and the only light is the default environment outside: the image will be \
+         black; add a light inside or move the camera"
+    ))
 }
 
 fn is_degenerate(p: &[Vec3; 3]) -> bool {
