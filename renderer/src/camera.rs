@@ -28,7 +28,7 @@ pub enum Projection {
 }
 
 /// The scene's camera, independent of the output resolution.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraDesc {
     /// Rigid transform (rotation and translation only).
     pub camera_to_world: Affine3A,
@@ -125,6 +125,8 @@ pub struct Camera {
     half_height: f32,
     orthographic: bool,
     aspect: f32,
+    /// What it was made from (its aspect the film's).
+    desc: CameraDesc,
 }
 
 /// A connection from a point to the camera (pbrt-v3's `Camera::Sample_Wi`).
@@ -170,7 +172,16 @@ impl Camera {
             half_height,
             orthographic,
             aspect,
+            desc: CameraDesc {
+                aspect: Some(aspect),
+                ..*desc
+            },
         }
+    }
+
+    /// The description it was made from, with the film's aspect.
+    pub fn desc(&self) -> &CameraDesc {
+        &self.desc
     }
 
     /// Width over height of the film.

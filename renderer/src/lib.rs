@@ -23,6 +23,7 @@
 pub mod camera;
 pub mod color;
 pub mod error_estimate;
+pub mod exposure;
 pub mod film;
 pub mod geometry;
 pub mod image;

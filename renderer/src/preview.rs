@@ -7,7 +7,7 @@
 //! view does. It is no estimate of the image: the frame that carries it says so
 //! (`Frame::preview`), and measurements skip it (its pass count is 0).
 
-use crate::camera::{Camera, CameraDesc};
+use crate::camera::Camera;
 use crate::image::Image;
 use crate::integrators::path_tracer::{PathSettings, PathTracer};
 use crate::integrators::{Cancelled, Integrator, RenderContext};
@@ -26,10 +26,7 @@ pub fn render(ctx: &RenderContext, cancel: &AtomicBool) -> Result<Image, Cancell
     let (w, h) = (ctx.camera.width, ctx.camera.height);
     let (pw, ph) = (w.div_ceil(COARSENESS), h.div_ceil(COARSENESS));
     // The full image's aspect, which rounding the size down would change.
-    let desc = CameraDesc {
-        aspect: Some(ctx.camera.aspect()),
-        ..ctx.scene.camera
-    };
+    let desc = *ctx.camera.desc();
     let coarse_ctx = RenderContext {
         camera: Camera::new(&desc, pw, ph),
         ..ctx.clone()

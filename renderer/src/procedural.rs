@@ -291,7 +291,52 @@ pub fn bundled_assets() -> Vec<(&'static str, String)> {
         ("cornell-glass.gltf", to_gltf_string(&cornell_box(true))),
         ("caustic-pool.gltf", to_gltf_string(&caustic_pool())),
         ("door.gltf", to_gltf_string(&door())),
+        ("material-spheres.gltf", to_gltf_string(&material_spheres())),
     ]
+}
+
+/// A model meant to be lit by its viewer, after the Khronos metal-rough sphere grid: two rows
+/// of five spheres, metal above and red plastic below, roughness 0 to 1 from left to right.
+/// It has no light: the default rule lights it with the studio, whose reflections grade with
+/// roughness.
+pub fn material_spheres() -> SceneDescription {
+    let mut meshes = Vec::new();
+    let mut materials = Vec::new();
+    for (row, (y, color, metallic)) in [
+        (0.55, Vec3::new(0.95, 0.93, 0.88), 1.0),
+        (-0.55, Vec3::new(0.7, 0.05, 0.04), 0.0),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        for i in 0..5 {
+            let roughness = i as f32 / 4.0;
+            let material = (row * 5 + i) as u32;
+            materials.push(
+                Material::metallic_roughness(color, metallic, roughness).named(&format!(
+                    "{} roughness {roughness}",
+                    ["metal", "plastic"][row]
+                )),
+            );
+            let center = Vec3::new(1.1 * (i as f32 - 2.0), y, 0.0);
+            meshes.push(uv_sphere(
+                &format!("sphere {row} {i}"),
+                center,
+                0.5,
+                48,
+                24,
+                false,
+                material,
+            ));
+        }
+    }
+    SceneDescription {
+        name: "material-spheres".into(),
+        meshes,
+        materials,
+        camera: Some(camera_looking(Vec3::new(0.0, 0.4, 7.5), Vec3::ZERO, 35.0)),
+        ..Default::default()
+    }
 }
 
 /// A slab of rippled glass: the top is a height field y = top + ripple(x, z) with smooth

@@ -4,7 +4,7 @@
 //! waiting on any lock the workers hold, and frames are never queued: the newest wins.
 //! Cancellation is checked per image row, so it takes effect within a fraction of a pass.
 
-use crate::camera::Camera;
+use crate::camera::{Camera, CameraDesc};
 use crate::error_estimate::ErrorEstimate;
 use crate::image::Image;
 use crate::integrators::{
@@ -47,6 +47,8 @@ pub struct SessionConfig {
     /// Called on the session's thread whenever a new frame is published (a viewer asks for a
     /// repaint here, so it redraws exactly when there is something new).
     pub on_frame: Option<FrameCallback>,
+    /// A view in place of the scene's camera (the viewer's orbit, `--camera-from`).
+    pub camera: Option<CameraDesc>,
 }
 
 pub type FrameCallback = Arc<dyn Fn() + Send + Sync>;
@@ -69,6 +71,7 @@ impl SessionConfig {
             target_rel_mse: None,
             background: false,
             on_frame: None,
+            camera: None,
         }
     }
 }
@@ -153,6 +156,10 @@ pub struct Session {
     integrator: &'static integrators::IntegratorInfo,
     threads: usize,
     seed: u64,
+    /// The scene's `SceneInfo::lighting`, for the image's header.
+    environment: String,
+    /// The view rendered (the scene's camera or the one given).
+    camera: CameraDesc,
 }
 
 impl Session {
@@ -187,7 +194,7 @@ impl Session {
             })
             .build()
             .map_err(|e| SessionError::Threads(e.to_string()))?;
-        let camera = Camera::new(&config.scene.camera, w, h);
+        let camera = Camera::new(&config.camera.unwrap_or(config.scene.camera), w, h);
         let ctx = RenderContext {
             scene: config.scene.clone(),
             camera,
@@ -237,6 +244,8 @@ impl Session {
             })
             .map_err(|e| SessionError::Threads(e.to_string()))?;
         Ok(Session {
+            environment: config.scene.info.lighting.clone(),
+            camera: *camera.desc(),
             shared,
             worker: Some(worker),
             params,
@@ -271,6 +280,8 @@ impl Session {
             params: self.params.clone(),
             seed: self.seed,
             scene: scene.to_path_buf(),
+            environment: self.environment.clone(),
+            camera: self.camera,
             threads: self.threads,
         }
     }

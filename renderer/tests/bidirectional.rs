@@ -8,29 +8,7 @@ use caustica_renderer::session::{Session, SessionConfig};
 use std::sync::Arc;
 
 mod common;
-use common::{mean, render, with_orthographic_camera};
-
-/// The mean over the image after each of `passes` passes of `integrator`, and the standard
-/// error of their average, from the spread of the per-pass means.
-fn mean_and_standard_error(
-    integrator: &mut dyn caustica_renderer::integrators::Integrator,
-    passes: u64,
-) -> (f64, f64) {
-    use std::sync::atomic::AtomicBool;
-    let cancel = AtomicBool::new(false);
-    let mut per_pass = Vec::new();
-    let mut previous_total = 0.0;
-    for pass in 0..passes {
-        integrator.render_counted_pass(pass, &cancel).unwrap();
-        let total = mean(&integrator.image()) * (pass + 1) as f64;
-        per_pass.push(total - previous_total);
-        previous_total = total;
-    }
-    let n = passes as f64;
-    let m = per_pass.iter().sum::<f64>() / n;
-    let var = per_pass.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0);
-    (m, (var / n).sqrt())
-}
+use common::{assert_strategies_agree, mean, render, with_orthographic_camera};
 
 /// Every strategy on its own (unweighted) converges to the same image for each path length
 /// it can sample: on the Cornell box (diffuse, one area light) every strategy samples every
@@ -44,45 +22,6 @@ fn mean_and_standard_error(
 fn each_strategy_alone_converges_to_the_same_image() {
     assert_strategies_agree(cornell_box(false), 3);
     assert_strategies_agree(with_orthographic_camera(cornell_box(false), 0.9), 2);
-}
-
-fn assert_strategies_agree(desc: SceneDescription, max_depth: usize) {
-    use caustica_renderer::camera::Camera;
-    use caustica_renderer::integrators::RenderContext;
-    use caustica_renderer::integrators::bdpt::{Bdpt, BdptSettings};
-    let scene = Arc::new(Scene::build(desc).unwrap());
-    let camera = Camera::new(&scene.camera, 16, 16);
-    for depth in 1..=max_depth {
-        let mut results = Vec::new();
-        for s in 0..=depth + 2 {
-            let t = depth + 2 - s;
-            if t == 0 || (s, t) == (1, 1) {
-                continue;
-            }
-            let mut bdpt = Bdpt::new(
-                RenderContext {
-                    scene: scene.clone(),
-                    camera,
-                    seed: 7,
-                },
-                BdptSettings {
-                    max_depth: depth as u32,
-                    only_strategy: Some((s, t)),
-                },
-            );
-            let (m, se) = mean_and_standard_error(&mut bdpt, 1024);
-            eprintln!("depth {depth}, (s, t) = ({s}, {t}): {m:.5} +- {se:.5}");
-            results.push(((s, t), m, se));
-        }
-        let &(_, m_ref, se_ref) = results.iter().find(|r| r.0.0 == 1).unwrap();
-        for &((s, t), m, se) in &results {
-            let tolerance = 4.0 * (se * se + se_ref * se_ref).sqrt();
-            assert!(
-                (m - m_ref).abs() < tolerance,
-                "depth {depth}: strategy ({s}, {t}) gives {m}, next-event estimation {m_ref} (tolerance {tolerance})"
-            );
-        }
-    }
 }
 
 /// bdpt reproduces the foundation's closed forms: inside the point-lit sphere L = 1, inside

@@ -3,6 +3,7 @@
 //! one-sided emission, shadow rays and the MIS weights between strategies. A very narrow camera looks at one point p0 of the
 //! plane, so every pixel estimates the same radiance and their spread gives the tolerance.
 
+use caustica_renderer::light::environment::{EnvironmentChoice, EnvironmentSettings};
 use caustica_renderer::material::{Material, TextureRef, TransportMode};
 use caustica_renderer::procedural::{camera_looking, quad};
 use caustica_renderer::sampling::sampler::Sampler;
@@ -31,8 +32,21 @@ fn plane_scene(material: Material) -> SceneDescription {
         )],
         materials: vec![material],
         camera: Some(camera_looking(EYE, Vec3::ZERO, 0.05)),
+        // Only the lights each test adds: the plane is large, so a small light over it would
+        // not count as the scene's own lighting by the default rule.
+        environment: EnvironmentSettings {
+            choice: EnvironmentChoice::None,
+            ..Default::default()
+        },
         ..Default::default()
     }
+}
+
+/// The plane lit by the uniform environment of radiance 1 alone.
+fn uniform_plane_scene(material: Material) -> SceneDescription {
+    let mut desc = plane_scene(material);
+    desc.environment.choice = EnvironmentChoice::Uniform;
+    desc
 }
 
 /// Mean radiance over the image (luminance channel x) and its standard error, for each
@@ -253,7 +267,7 @@ fn uniform_environment_on_diffuse_and_glossy_planes() {
     // sampling its BSDF alone.
     assert_close(
         "environment, diffuse",
-        render_mean(plane_scene(Material::diffuse(Vec3::splat(0.4))), 32),
+        render_mean(uniform_plane_scene(Material::diffuse(Vec3::splat(0.4))), 32),
         0.4,
     );
     let glossy = Material {
@@ -278,7 +292,7 @@ fn uniform_environment_on_diffuse_and_glossy_planes() {
     }
     assert_close(
         "environment, glossy",
-        render_mean(plane_scene(glossy), 64),
+        render_mean(uniform_plane_scene(glossy), 64),
         sum / n as f64,
     );
 }
@@ -308,7 +322,7 @@ fn uniform_environment_on_layered_planes() {
     let exact = 0.8 * specular_albedo(mu_o, 0.09, Vec3::splat(0.04), 1.0).x;
     assert_close(
         "environment, clearcoat",
-        render_mean(plane_scene(coat), 64),
+        render_mean(uniform_plane_scene(coat), 64),
         exact as f64,
     );
     let tinted = Material {
@@ -323,7 +337,7 @@ fn uniform_environment_on_layered_planes() {
     let exact = specular_albedo(mu_o, 0.16, f0, 0.7).x;
     assert_close(
         "environment, tinted specular",
-        render_mean(plane_scene(tinted.clone()), 64),
+        render_mean(uniform_plane_scene(tinted.clone()), 64),
         exact as f64,
     );
     let velvet = Material {
@@ -336,7 +350,7 @@ fn uniform_environment_on_layered_planes() {
     let exact = 0.9 * sheen::albedo(mu_o, 0.5);
     assert_close(
         "environment, sheen",
-        render_mean(plane_scene(velvet), 64),
+        render_mean(uniform_plane_scene(velvet), 64),
         exact as f64,
     );
 }

@@ -176,6 +176,39 @@ fn orthographic_cameras_are_read_with_their_film_size() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// Every camera of the file is read, named, in the order of the nodes; the first is the
+/// scene's camera.
+#[test]
+fn every_camera_is_read_and_the_first_is_the_scenes() {
+    use caustica_renderer::camera::Projection;
+    let dir = temp_dir("cameras");
+    let mut v = to_gltf(&cornell_box(false));
+    v["cameras"][0]["name"] = json!("front");
+    v["cameras"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"type": "orthographic", "orthographic": {"xmag": 2.0, "ymag": 1.0, "znear": 0.1, "zfar": 100.0}}));
+    let nodes = v["nodes"].as_array_mut().unwrap();
+    nodes.push(
+        json!({"name": "top view", "camera": 1, "translation": [0.0, 5.0, 0.0],
+        "rotation": [-0.70710677, 0.0, 0.0, 0.70710677]}),
+    );
+    let node = nodes.len() - 1;
+    v["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(node));
+    let scene = load(&write_json(&dir, "two-cameras.gltf", &v)).unwrap();
+    let names: Vec<&str> = scene.cameras.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["front", "top view"]);
+    assert_eq!(scene.camera, scene.cameras[0].1);
+    let top = scene.cameras[1].1;
+    assert_eq!(top.projection, Projection::Orthographic { ymag: 1.0 });
+    let forward = top.camera_to_world.matrix3 * glam::Vec3A::NEG_Z;
+    assert!(forward.abs_diff_eq(glam::Vec3A::NEG_Y, 1e-5), "{forward}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn punctual_lights_transforms_and_mirrored_nodes() {
     let dir = temp_dir("punctual");
@@ -261,7 +294,7 @@ fn punctual_lights_transforms_and_mirrored_nodes() {
 }
 
 #[test]
-fn a_scene_without_emitters_gets_the_uniform_environment() {
+fn a_scene_without_emitters_gets_the_studio_environment() {
     let dir = temp_dir("noemit");
     let mut desc = cornell_box(false);
     desc.materials
@@ -275,7 +308,13 @@ fn a_scene_without_emitters_gets_the_uniform_environment() {
             .info
             .warnings
             .iter()
-            .any(|w| w.contains("uniform environment"))
+            .any(|w| w.contains("built-in studio environment (no light sources)"))
+    );
+    assert!(
+        scene
+            .info
+            .lighting
+            .starts_with("studio; chosen by the default rule")
     );
     std::fs::remove_dir_all(dir).unwrap();
 }

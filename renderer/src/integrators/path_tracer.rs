@@ -88,12 +88,12 @@ pub fn li(
         *rays += 1;
         let Some(si) = scene.intersect(&ray) else {
             if let Some(env) = scene.environment {
-                let le = scene.environment_radiance();
+                let le = scene.environment_radiance(ray.d);
                 let w = if depth == 0 || specular_bounce {
                     1.0
                 } else {
                     let light_pdf = match &scene.lights[env] {
-                        Light::Environment(e) => scene.light_sampler.pmf(env) * e.pdf_li(),
+                        Light::Environment(e) => scene.light_sampler.pmf(env) * e.pdf_li(ray.d),
                         _ => 0.0,
                     };
                     power_heuristic(1.0, prev_bsdf_pdf, 1.0, light_pdf)

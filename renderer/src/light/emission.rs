@@ -125,16 +125,17 @@ pub fn sample_le(
         }
         Light::Environment(e) => {
             // Direction towards the environment, then a disc across the scene (pbrt-v4 12.5).
-            let to_env = sample_uniform_sphere(u_dir);
+            let (to_env, pdf_dir) = e.sample_direction(u_dir)?;
             let frame = Frame::from_z(-to_env);
             let disk = sample_uniform_disk_concentric(u_pos) * radius;
             let o = center + to_env * radius + frame.s * disk.x + frame.t * disk.y;
-            Some(EmittedRay {
+            let le = e.le(to_env);
+            (le.max_element() > 0.0).then(|| EmittedRay {
                 ray: Ray::new(o, -to_env),
-                le: e.radiance,
+                le,
                 n: -to_env,
                 pdf_pos: 1.0 / (PI * radius * radius),
-                pdf_dir: uniform_sphere_pdf(),
+                pdf_dir,
             })
         }
     }
@@ -170,6 +171,6 @@ pub fn pdf_le(scene: &Scene, light: &Light, w: Vec3) -> (f32, f32) {
             )
         }
         Light::Directional(_) => (1.0 / (PI * radius * radius), 0.0),
-        Light::Environment(_) => (1.0 / (PI * radius * radius), uniform_sphere_pdf()),
+        Light::Environment(e) => (1.0 / (PI * radius * radius), e.pdf_li(-w)),
     }
 }

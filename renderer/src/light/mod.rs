@@ -1,14 +1,16 @@
 //! Lights (DESIGN.md section 2): emissive triangles as area lights, glTF's punctual lights
-//! (point, spot, directional; delta lights that no technique can hit), and a uniform
-//! environment for scenes without emitters. Sampling follows pbrt-v4 chapter 12: `sample_li`
+//! (point, spot, directional; delta lights that no technique can hit), and the environment
+//! (uniform or an equirectangular map) around the scene. Sampling follows pbrt-v4 chapter 12: `sample_li`
 //! picks a point on the light as seen from a reference point and returns a solid-angle pdf
 //! (1 for delta lights); `pdf_li` is the same density for a direction that hit the light.
 
 pub mod area;
 pub mod emission;
 pub mod environment;
+pub mod environment_map;
 pub mod punctual;
 pub mod sampler;
+pub mod studio;
 
 use glam::Vec3;
 
@@ -40,7 +42,7 @@ pub enum Light {
     Point(punctual::PointLight),
     Spot(punctual::SpotLight),
     Directional(punctual::DirectionalLight),
-    Environment(environment::UniformEnvironment),
+    Environment(environment::Environment),
 }
 
 impl Light {

@@ -1,4 +1,5 @@
-//! Piecewise-constant discrete distribution, used to choose lights in proportion to power.
+//! Piecewise-constant distributions: discrete (lights chosen in proportion to power) and over
+//! the unit square (an environment map's texels in proportion to their radiance).
 
 use crate::sampling::sampler::ONE_MINUS_EPSILON;
 
@@ -85,6 +86,70 @@ impl Distribution1D {
     }
 }
 
+/// Piecewise-constant density over [0,1)^2 on an `nu` x `nv` grid of cells, sampled by
+/// inversion: a row from the marginal, then a column from that row's conditional
+/// distribution (pbrt-v4's `PiecewiseConstant2D`, section A.5.3).
+#[derive(Clone, Debug)]
+pub struct Distribution2D {
+    nu: usize,
+    nv: usize,
+    /// One distribution per row, over its `nu` cells.
+    conditional: Vec<Distribution1D>,
+    /// Over the rows, in proportion to their sums.
+    marginal: Distribution1D,
+}
+
+impl Distribution2D {
+    /// `weights` holds `nv` rows of `nu` cells each, row after row; negative or non-finite
+    /// weights count as zero. All zero gives the uniform density.
+    pub fn new(weights: &[f64], nu: usize, nv: usize) -> Self {
+        assert!(nu > 0 && nv > 0 && weights.len() == nu * nv);
+        let conditional: Vec<Distribution1D> =
+            weights.chunks(nu).map(Distribution1D::new).collect();
+        let row_sums: Vec<f64> = weights
+            .chunks(nu)
+            .map(|row| row.iter().filter(|w| w.is_finite() && **w > 0.0).sum())
+            .collect();
+        Distribution2D {
+            nu,
+            nv,
+            conditional,
+            marginal: Distribution1D::new(&row_sums),
+        }
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        self.marginal.memory_bytes()
+            + self
+                .conditional
+                .iter()
+                .map(Distribution1D::memory_bytes)
+                .sum::<usize>()
+    }
+
+    /// A point of [0,1)^2 for `u`, with its density (with respect to area on the square).
+    pub fn sample(&self, u: glam::Vec2) -> (glam::Vec2, f32) {
+        let Some((row, p_row, v_in)) = self.marginal.sample_remapped(u.y) else {
+            return (glam::Vec2::ZERO, 0.0);
+        };
+        let Some((col, p_col, u_in)) = self.conditional[row].sample_remapped(u.x) else {
+            return (glam::Vec2::ZERO, 0.0);
+        };
+        let point = glam::Vec2::new(
+            ((col as f32 + u_in) / self.nu as f32).min(ONE_MINUS_EPSILON),
+            ((row as f32 + v_in) / self.nv as f32).min(ONE_MINUS_EPSILON),
+        );
+        (point, p_row * p_col * (self.nu * self.nv) as f32)
+    }
+
+    /// The density of `sample` at `p` in [0,1]^2.
+    pub fn pdf(&self, p: glam::Vec2) -> f32 {
+        let col = ((p.x * self.nu as f32) as usize).min(self.nu - 1);
+        let row = ((p.y * self.nv as f32) as usize).min(self.nv - 1);
+        self.marginal.pmf(row) * self.conditional[row].pmf(col) * (self.nu * self.nv) as f32
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -120,5 +185,32 @@ mod tests {
         let (i, _, r) = d.sample_remapped(0.625).unwrap();
         assert_eq!(i, 2);
         assert!((r - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn two_dimensional_density_matches_its_samples() {
+        // Cells weighted 1..=6 on a 3 x 2 grid: the fraction of samples in each cell is its
+        // weight over 21, and the density is constant within a cell.
+        let weights: Vec<f64> = (1..=6).map(f64::from).collect();
+        let d = Distribution2D::new(&weights, 3, 2);
+        let n = 300;
+        let mut counts = [0usize; 6];
+        for i in 0..n {
+            for j in 0..n {
+                let u = glam::Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                let (p, pdf) = d.sample(u);
+                let cell = (p.y * 2.0) as usize * 3 + (p.x * 3.0) as usize;
+                counts[cell] += 1;
+                assert!((pdf - d.pdf(p)).abs() < 1e-4 * pdf, "{pdf} at {p}");
+                assert!((pdf - weights[cell] as f32 / 21.0 * 6.0).abs() < 1e-4);
+            }
+        }
+        for (c, w) in counts.iter().zip(&weights) {
+            let expected = w / 21.0;
+            assert!(
+                (*c as f64 / (n * n) as f64 - expected).abs() < 1e-3,
+                "{counts:?}"
+            );
+        }
     }
 }

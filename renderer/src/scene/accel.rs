@@ -35,6 +35,7 @@ impl Boundable for PaddedBounds {
     }
 }
 
+#[derive(Clone)]
 pub struct Accel {
     bvh: Option<CwBvh>,
     /// Scaled triangles in the BVH's primitive order, so leaves read memory in sequence.

@@ -1,8 +1,8 @@
 //! `Scene::build`: a `SceneDescription` validated and turned into the scene the integrators
 //! trace, in three steps: the meshes flattened into world-space triangles (bad data is an
 //! error naming the mesh, degenerate triangles are dropped and counted), the lights (an area
-//! light per emissive triangle, the punctual lights, a uniform environment when nothing
-//! emits), and the BVH.
+//! light per emissive triangle, the punctual lights, the environment the user chose or the
+//! default-lighting rule gives), and the BVH.
 
 use super::accel::Accel;
 use super::{MeshDesc, TriangleAttributes};
@@ -11,7 +11,6 @@ use crate::camera::CameraDesc;
 use crate::geometry::{Bounds3, Frame};
 use crate::light::Light;
 use crate::light::area::{AreaLight, Cutout};
-use crate::light::environment::UniformEnvironment;
 use crate::light::punctual::{DirectionalLight, PointLight, SpotLight};
 use crate::light::sampler::PowerLightSampler;
 use crate::material::{AlphaMode, Material};
@@ -45,6 +44,8 @@ impl Scene {
             textures,
             lights: punctual,
             camera,
+            cameras,
+            environment: environment_settings,
             mut warnings,
         } = desc;
         if materials.is_empty() {
@@ -70,20 +71,7 @@ impl Scene {
         let (mut lights, triangle_light) =
             area_lights(&positions, &attributes, &uvs1, &materials, &textures);
         lights.extend(punctual.iter().map(|l| punctual_light(l, scene_radius)));
-        let default_environment = lights.is_empty();
-        let mut environment = None;
-        if default_environment {
-            warnings.push(
-                "the scene has no emitter: lit by a uniform environment of radiance 1".to_string(),
-            );
-            environment = Some(lights.len());
-            lights.push(Light::Environment(UniformEnvironment {
-                radiance: Vec3::ONE,
-                scene_radius,
-            }));
-        }
         let light_sampler = PowerLightSampler::new(&lights);
-
         let default_camera = camera.is_none();
         if default_camera {
             warnings.push(
@@ -105,7 +93,9 @@ impl Scene {
             lights: lights.len(),
             degenerate_triangles_dropped: dropped,
             default_camera,
-            default_environment,
+            default_environment: false,
+            lighting: String::new(),
+            environment_warnings_from: warnings.len(),
             warnings,
             load_time: Duration::ZERO,
             bvh_build_time: start.elapsed(),
@@ -120,48 +110,16 @@ impl Scene {
             lights,
             light_sampler,
             triangle_light,
-            environment,
+            environment: None,
             camera,
+            cameras,
             bounds,
             info,
             accel,
         };
-        if default_environment && let Some(warning) = enclosure_warning(&scene) {
-            scene.info.warnings.push(warning);
-        }
+        scene.set_environment(environment_settings);
         Ok(scene)
     }
-}
-
-/// Directions from the camera that must all meet a surface for it to count as enclosed.
-const ENCLOSURE_RAYS: u32 = 256;
-
-/// When the only light is the default environment, whose light comes from outside, and the
-/// camera is enclosed (every one of `ENCLOSURE_RAYS` directions spread over the sphere meets
-/// a surface: a skybox mesh, a closed room without lamps), no light reaches what it sees: the
-/// image is black. Says so, naming the material most of those rays meet.
-fn enclosure_warning(scene: &Scene) -> Option<String> {
-    let eye = Vec3::from(scene.camera.camera_to_world.translation);
-    let mut hits: HashMap<u32, u32> = HashMap::new();
-    for i in 0..ENCLOSURE_RAYS {
-        // A Fibonacci lattice: evenly spread, deterministic.
-        let z = 1.0 - (2.0 * i as f32 + 1.0) / ENCLOSURE_RAYS as f32;
-        let phi = i as f32 * std::f32::consts::PI * (3.0 - 5f32.sqrt());
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let ray = crate::geometry::Ray::new(eye, Vec3::new(r * phi.cos(), r * phi.sin(), z));
-        let si = scene.intersect(&ray)?;
-        let material = scene.attributes[si.triangle as usize].material;
-        *hits.entry(material).or_default() += 1;
-    }
-    let (&material, _) = hits
-        .iter()
-        .max_by_key(|(m, n)| (**n, std::cmp::Reverse(**m)))?;
-    let name = &scene.materials[material as usize].name;
-    Some(format!(
-        "the camera is enclosed (every direction from it meets a surface, mostly material \
-         '{name}') and the only light is the default environment outside: the image will be \
-         black; add a light inside or move the camera"
-    ))
 }
 
 fn is_degenerate(p: &[Vec3; 3]) -> bool {

@@ -5,6 +5,7 @@
 //! panic inside the gltf crate is caught and reported as an error.
 
 use crate::camera::{CameraDesc, Projection};
+use crate::light::environment::EnvironmentSettings;
 use crate::material::{AlphaMode, Material, TextureRef};
 use crate::scene::{MeshDesc, PunctualLightDesc, Scene, SceneDescription, SceneError};
 use crate::texture::{Texture, Wrap};
@@ -37,10 +38,19 @@ const READ_FROM_JSON: &[&str] = &[
 
 const MAX_NODE_DEPTH: usize = 256;
 
-/// Loads and builds a scene from a glTF file.
+/// Loads and builds a scene from a glTF file, lit from outside as the default rule says.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    load_with_environment(path, EnvironmentSettings::default())
+}
+
+/// Loads and builds a scene from a glTF file with the environment `environment`.
+pub fn load_with_environment(
+    path: &Path,
+    environment: EnvironmentSettings,
+) -> Result<Scene, SceneError> {
     let start = Instant::now();
-    let desc = load_description(path)?;
+    let mut desc = load_description(path)?;
+    desc.environment = environment;
     let mut scene = Scene::build(desc).map_err(|e| e.in_file(path))?;
     scene.info.load_time = start.elapsed();
     Ok(scene)
@@ -431,9 +441,7 @@ impl Loader<'_> {
             let weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
             self.add_mesh(&mesh, world, weights)?;
         }
-        if let Some(camera) = node.camera()
-            && self.desc.camera.is_none()
-        {
+        if let Some(camera) = node.camera() {
             let (projection, aspect) = match camera.projection() {
                 gltf::camera::Projection::Perspective(p) => {
                     (Projection::Perspective { yfov: p.yfov() }, p.aspect_ratio())
@@ -449,11 +457,18 @@ impl Loader<'_> {
                 Projection::Orthographic { ymag } => ymag > 0.0 && ymag.is_finite(),
             } && aspect.is_none_or(|a| a > 0.0 && a.is_finite());
             if film {
-                self.desc.camera = Some(CameraDesc {
+                let desc = CameraDesc {
                     camera_to_world: rigid(world),
                     projection,
                     aspect,
-                });
+                };
+                // The first is the scene's camera; all are offered to the viewer.
+                self.desc.camera.get_or_insert(desc);
+                let name = camera
+                    .name()
+                    .or(node.name())
+                    .map_or_else(|| format!("camera {}", camera.index()), str::to_string);
+                self.desc.cameras.push((name, desc));
             } else {
                 self.desc.warnings.push(format!(
                     "cameras[{}]: a film of no size ({projection:?}, aspect {aspect:?}) is ignored",

@@ -7,6 +7,7 @@ mod build;
 mod draco;
 pub mod gltf;
 pub mod gltf_export;
+mod lighting;
 mod traversal;
 pub mod triangle;
 
@@ -89,6 +90,10 @@ pub struct SceneDescription {
     pub textures: Vec<Texture>,
     pub lights: Vec<PunctualLightDesc>,
     pub camera: Option<CameraDesc>,
+    /// Every camera of the file, named, in the order met (the first is `camera`).
+    pub cameras: Vec<(String, CameraDesc)>,
+    /// What lights the scene from outside (not part of glTF: the user's choice).
+    pub environment: crate::light::environment::EnvironmentSettings,
     pub warnings: Vec<String>,
 }
 
@@ -108,6 +113,11 @@ pub struct SceneInfo {
     pub degenerate_triangles_dropped: usize,
     pub default_camera: bool,
     pub default_environment: bool,
+    /// What lights the scene from outside and, when the default rule chose it, why.
+    pub lighting: String,
+    /// Where the environment's warnings start in `warnings` (they come last, and are
+    /// replaced with the environment).
+    pub environment_warnings_from: usize,
     pub warnings: Vec<String>,
     pub load_time: Duration,
     pub bvh_build_time: Duration,
@@ -179,6 +189,7 @@ impl SurfaceInteraction {
 /// Relative shortening of shadow rays so they never reach the surface they aim at (pbrt-v4).
 pub const SHADOW_EPSILON: f32 = 1e-4;
 
+#[derive(Clone)]
 pub struct Scene {
     pub positions: Vec<[Vec3; 3]>,
     pub attributes: Vec<TriangleAttributes>,
@@ -195,6 +206,8 @@ pub struct Scene {
     /// Index of the environment light, if any.
     pub environment: Option<usize>,
     pub camera: CameraDesc,
+    /// The file's cameras, named (empty when it has none and `camera` is the default view).
+    pub cameras: Vec<(String, CameraDesc)>,
     pub bounds: Bounds3,
     pub info: SceneInfo,
     accel: Accel,
@@ -379,10 +392,11 @@ impl Scene {
             .map_or(Vec3::ZERO, |(_, a)| a.l(&self.textures, &si.uv, w))
     }
 
-    /// Radiance arriving along a ray that left the scene.
-    pub fn environment_radiance(&self) -> Vec3 {
+    /// Radiance arriving along a ray that left the scene in direction `w`.
+    #[inline]
+    pub fn environment_radiance(&self, w: Vec3) -> Vec3 {
         match self.environment.and_then(|i| self.lights.get(i)) {
-            Some(Light::Environment(e)) => e.radiance,
+            Some(Light::Environment(e)) => e.le(w),
             _ => Vec3::ZERO,
         }
     }

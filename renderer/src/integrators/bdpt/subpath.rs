@@ -96,7 +96,7 @@ impl<S: SampleSource> Walker<'_, S> {
                 };
                 path[1].pdf_fwd = e.pdf_pos * cos;
             }
-            path[0].pdf_fwd = infinite_light_density(scene);
+            path[0].pdf_fwd = infinite_light_density(scene, e.ray.d);
         }
     }
 

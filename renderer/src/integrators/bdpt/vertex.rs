@@ -248,7 +248,7 @@ impl Vertex {
             return 0.0;
         }
         if self.is_infinite_light(scene) {
-            return infinite_light_density(scene);
+            return infinite_light_density(scene, w);
         }
         let Some((i, light)) = self.emitter(scene) else {
             return 0.0;
@@ -263,7 +263,7 @@ impl Vertex {
         }
         let w = (towards.p - self.p).normalize_or_zero();
         if self.is_infinite_light(scene) {
-            return scene.environment_radiance();
+            return scene.environment_radiance(-w);
         }
         match (self.emitter(scene), &self.si) {
             (Some((_, Light::Area(a))), Some(si)) => a.l(&scene.textures, &si.uv, w),
@@ -272,15 +272,16 @@ impl Vertex {
     }
 }
 
-/// Directional density of a light subpath leaving the infinite lights, whatever its direction
-/// (pmf times the uniform environment's density; a directional light's is a delta, zero here).
-pub fn infinite_light_density(scene: &Scene) -> f32 {
+/// Directional density of a light subpath leaving the infinite lights in direction `w` (of
+/// travel): pmf times the environment's density for the direction it came from, -w (pbrt-v3's
+/// `InfiniteLightDensity`; a directional light's is a delta, zero here).
+pub fn infinite_light_density(scene: &Scene, w: Vec3) -> f32 {
     scene
         .lights
         .iter()
         .enumerate()
         .map(|(i, l)| match l {
-            Light::Environment(e) => scene.light_sampler.pmf(i) * e.pdf_li(),
+            Light::Environment(e) => scene.light_sampler.pmf(i) * e.pdf_li(-w),
             _ => 0.0,
         })
         .sum()

@@ -66,7 +66,7 @@ pub fn trace_eye_path(
     for depth in 0..=max_depth {
         *rays += 1;
         let Some(si) = scene.intersect(&ray) else {
-            emitted += beta * scene.environment_radiance();
+            emitted += beta * scene.environment_radiance(ray.d);
             break;
         };
         beta *= si.transmittance;

@@ -132,7 +132,7 @@ pub fn auto_radius(ctx: &RenderContext) -> f64 {
     } else {
         (ctx.scene.bounds.center() - ctx.camera.position()).length() as f64
     };
-    crate::transport::pixel_footprint_radius(distance, ctx.camera.height, &ctx.scene.camera)
+    crate::transport::pixel_footprint_radius(distance, ctx.camera.height, ctx.camera.desc())
 }
 
 #[derive(Clone, Copy, Debug, Default)]
