@@ -12,7 +12,7 @@ use crate::chart;
 use anyhow::{Context, anyhow};
 use caustica_renderer::image::{Image, compare, read_exr};
 use caustica_renderer::integrators::{self, ParamValues};
-use caustica_renderer::scene::{Scene, gltf};
+use caustica_renderer::scene::Scene;
 use caustica_renderer::session::{Frame, MAX_RESOLUTION, Session, SessionConfig};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -57,6 +57,8 @@ pub struct ConvergeArgs {
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
+    #[command(flatten)]
+    pub environment: crate::environment_flags::EnvironmentFlags,
     /// Checkpoints per decade of time.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub checkpoints_per_decade: u32,
@@ -386,7 +388,7 @@ pub fn run(args: &ConvergeArgs) -> Result<(), crate::render::Failure> {
         .map(|p| read_exr(p).map(|(image, _)| image))
         .transpose()
         .map_err(|e| anyhow!("reference: {e}"))?;
-    let scene = Arc::new(gltf::load(&args.scene).map_err(|e| anyhow!(e))?);
+    let scene = Arc::new(args.environment.load(&args.scene)?);
     let (width, height) = image_size(args, &scene, reference.as_ref());
     let mut specs = specs;
     for spec in specs.iter_mut().filter(|s| s.recommended) {

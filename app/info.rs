@@ -1,8 +1,6 @@
 //! `caustica info`: what a scene holds, what light transport it has, which estimators can
 //! render it and which one to use, with the command line that does.
 
-use anyhow::anyhow;
-use caustica_renderer::scene::gltf;
 use caustica_renderer::transport;
 use clap::Args;
 use std::path::PathBuf;
@@ -14,10 +12,12 @@ pub struct InfoArgs {
     pub scene: PathBuf,
     #[command(flatten)]
     pub size: crate::render::SizeArgs,
+    #[command(flatten)]
+    pub environment: crate::environment_flags::EnvironmentFlags,
 }
 
 pub fn run(args: &InfoArgs) -> Result<(), crate::render::Failure> {
-    let scene = gltf::load(&args.scene).map_err(|e| anyhow!(e))?;
+    let scene = args.environment.load(&args.scene)?;
     let (width, height) = args.size.resolve(scene.camera.aspect);
     let started = Instant::now();
     let (s, r) = transport::analyse(&scene, width, height);
@@ -34,6 +34,7 @@ pub fn run(args: &InfoArgs) -> Result<(), crate::render::Failure> {
             "the file's camera"
         }
     );
+    println!("  environment: {}", i.lighting);
     for w in &i.warnings {
         println!("  warning: {w}");
     }

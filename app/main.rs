@@ -6,6 +6,7 @@
 
 mod chart;
 mod converge;
+mod environment_flags;
 mod info;
 mod merge;
 mod param_flags;

@@ -5,8 +5,6 @@
 //! into the header (`caustica:estimated_relmse`), so a user knows how far it can be trusted.
 
 use crate::param_flags::ParamFlags;
-use anyhow::anyhow;
-use caustica_renderer::scene::gltf;
 use caustica_renderer::transport;
 use clap::Args;
 use std::path::PathBuf;
@@ -23,6 +21,8 @@ pub struct ReferenceArgs {
     pub time: f64,
     #[command(flatten)]
     pub size: crate::render::SizeArgs,
+    #[command(flatten)]
+    pub environment: crate::environment_flags::EnvironmentFlags,
     /// Seed (a reference for runs of seed 0 is best rendered with another).
     #[arg(long, default_value_t = 1_000_000)]
     pub seed: u64,
@@ -46,7 +46,7 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
             args.output.display()
         )));
     }
-    let scene = gltf::load(&args.scene).map_err(|e| anyhow!(e))?;
+    let scene = args.environment.load(&args.scene)?;
     let (width, height) = args.size.resolve(scene.camera.aspect);
     let survey = transport::survey_at(&scene, width, height);
     let r = survey.reference(width, height, &scene.camera);
@@ -68,7 +68,9 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
             given: r.params.clone(),
         },
         stats: args.stats.clone(),
-        exposure: 0.0,
+        exposure: crate::render::Exposure::Auto,
+        environment: args.environment.clone(),
+        camera_from: None,
     };
     crate::render::run(&render)
 }

@@ -2,10 +2,12 @@
 
 use crate::param_flags::{ParamFlags, flag_of};
 use anyhow::{Context, anyhow};
-use caustica_renderer::image::{write_exr, write_png};
+use caustica_renderer::camera::CameraDesc;
+use caustica_renderer::exposure::auto_exposure;
+use caustica_renderer::image::{read_exr, write_exr, write_png};
 use caustica_renderer::integrators;
+use caustica_renderer::metadata::camera_from_json;
 use caustica_renderer::metadata::exr_metadata;
-use caustica_renderer::scene::gltf;
 use caustica_renderer::session::{MAX_RESOLUTION, Session, SessionConfig, SessionError};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -35,6 +37,12 @@ pub struct RenderArgs {
     pub until_error: Option<f64>,
     #[command(flatten)]
     pub size: SizeArgs,
+    #[command(flatten)]
+    pub environment: crate::environment_flags::EnvironmentFlags,
+    /// Render the view saved in this EXR's header (`caustica:camera`, written by the viewer's
+    /// and the command line's snapshots) in place of the scene's camera.
+    #[arg(long, value_name = "FILE.exr")]
+    pub camera_from: Option<PathBuf>,
     /// Seed of every random number; the same seed gives the same image on any thread count.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -49,9 +57,29 @@ pub struct RenderArgs {
     /// acceptance rates per path length).
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
-    /// Exposure in stops applied to PNG output.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub exposure: f32,
+    /// Exposure in stops applied to PNG output, or `auto`: the 97th percentile of the lit
+    /// pixels' luminance shown at 90 % of white (README, "Exposure").
+    #[arg(long, default_value = "auto", value_parser = parse_exposure, allow_negative_numbers = true)]
+    pub exposure: Exposure,
+}
+
+/// An exposure in stops, or automatic.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Exposure {
+    Auto,
+    Stops(f32),
+}
+
+fn parse_exposure(s: &str) -> Result<Exposure, String> {
+    if s == "auto" {
+        return Ok(Exposure::Auto);
+    }
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v.abs() <= 20.0 => Ok(Exposure::Stops(v)),
+        _ => Err(format!(
+            "'{s}' is not `auto` or a number of stops from -20 to 20"
+        )),
+    }
 }
 
 /// The registered integrators' names, as the values an `--integrator` flag accepts.
@@ -167,7 +195,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         .into());
     }
 
-    let scene = Arc::new(gltf::load(&args.scene).map_err(|e| anyhow!(e))?);
+    let scene = Arc::new(args.environment.load(&args.scene)?);
     let si = &scene.info;
     eprintln!(
         "{}: {} triangles, {} lights, loaded in {:.1} ms (BVH {:.1} ms)",
@@ -177,7 +205,10 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         si.load_time.as_secs_f64() * 1e3,
         si.bvh_build_time.as_secs_f64() * 1e3
     );
-    let (width, height) = args.size.resolve(scene.camera.aspect);
+    let camera = args.camera_from.as_deref().map(camera_from).transpose()?;
+    let (width, height) = args
+        .size
+        .resolve(camera.map_or(scene.camera.aspect, |c| c.aspect));
     for w in &si.warnings {
         eprintln!("warning: {w}");
     }
@@ -195,6 +226,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         max_passes: spp,
         time_limit: args.time.map(Duration::from_secs_f64),
         target_rel_mse: args.until_error,
+        camera,
         ..SessionConfig::new(scene.clone(), info.name, width, height)
     })
     .map_err(|e| match e {
@@ -254,7 +286,17 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
     let estimate = frame.error.as_ref().as_ref();
     match format {
         Format::Exr => write_exr(&args.output, &frame.image, &metadata),
-        Format::Png => write_png(&args.output, &frame.image, args.exposure),
+        Format::Png => {
+            let exposure = match args.exposure {
+                Exposure::Stops(ev) => ev,
+                Exposure::Auto => {
+                    let ev = auto_exposure(&frame.image);
+                    eprintln!("exposure: auto, {ev:+.2} stops");
+                    ev
+                }
+            };
+            write_png(&args.output, &frame.image, exposure)
+        }
     }
     .with_context(|| "cannot write the image".to_string())?;
     if let Some(path) = &args.stats {
@@ -299,6 +341,18 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         args.output.display()
     );
     Ok(())
+}
+
+/// The camera saved in an EXR's header.
+fn camera_from(path: &Path) -> anyhow::Result<CameraDesc> {
+    let (_, metadata) = read_exr(path).map_err(|e| anyhow!(e))?;
+    let json = metadata.get("camera").ok_or_else(|| {
+        anyhow!(
+            "{}: the header has no caustica:camera (an image saved by Caustica records its view)",
+            path.display()
+        )
+    })?;
+    camera_from_json(json).map_err(|e| anyhow!("{}: {e}", path.display()))
 }
 
 #[cfg(test)]

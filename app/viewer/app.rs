@@ -6,9 +6,12 @@ use crate::viewer::ViewerApp;
 use crate::viewer::automation::resident_bytes;
 use crate::viewer::command::Command;
 use crate::viewer::controller::ControllerEvent;
+use crate::viewer::navigation::Orbit;
 use crate::viewer::panels::{self, PanelStatus};
 use crate::viewer::plots;
 use crate::viewer::settings::STORAGE_KEY;
+use caustica_renderer::exposure::auto_exposure;
+use caustica_renderer::metadata::camera_from_json;
 use caustica_renderer::session::Frame;
 use eframe::egui::{self, Color32, Key, KeyboardShortcut, Modifiers, RichText};
 use std::path::PathBuf;
@@ -38,7 +41,61 @@ pub(super) fn square_corners(ctx: &egui::Context) {
     });
 }
 
+/// How far an arrow key turns the camera (radians), and a Page key's dolly factor.
+const KEY_TURN: f32 = std::f32::consts::PI / 12.0;
+const KEY_DOLLY: f32 = 1.25;
+/// Radians of orbit for a drag across the whole height of the view.
+const DRAG_TURN: f32 = std::f32::consts::PI;
+
+fn turn(yaw: f32, pitch: f32) -> Command {
+    Command::MoveCamera {
+        orbit: [yaw, pitch],
+        pan: [0.0; 2],
+        dolly: 1.0,
+    }
+}
+
+fn dolly(factor: f32) -> Command {
+    Command::MoveCamera {
+        orbit: [0.0; 2],
+        pan: [0.0; 2],
+        dolly: factor,
+    }
+}
+
 impl ViewerApp {
+    /// The camera gestures on the image as one move (the scene follows the mouse: dragging
+    /// right turns it to the right, Blender's convention), once per UI frame so a drag
+    /// restarts the render at most once a frame, each restart showing the quick preview.
+    fn move_camera_by_gestures(&mut self) {
+        let g = self.viewport.take_gesture();
+        if g.is_empty() {
+            return;
+        }
+        self.apply(Command::MoveCamera {
+            orbit: [-g.orbit.x * DRAG_TURN, -g.orbit.y * DRAG_TURN],
+            pan: [-g.pan.x, g.pan.y],
+            dolly: (-g.dolly * 0.002).exp(),
+        });
+    }
+
+    /// The view saved for `path`, if any, replaces the scene's camera.
+    fn restore_view(&mut self, path: &std::path::Path) {
+        self.view = None;
+        let saved = self.settings.view.clone();
+        let Some((_, json)) = saved.filter(|(p, _)| p == path) else {
+            return;
+        };
+        let (Ok(camera), Some(loaded)) = (camera_from_json(&json), &self.controller.scene) else {
+            return;
+        };
+        self.view = Some(Orbit::from_camera(&camera, &loaded.scene.bounds));
+        self.controller.camera = self.view.map(|v| v.camera());
+        if let Err(e) = self.controller.restart(&self.settings) {
+            self.error(e);
+        }
+    }
+
     /// Background results, dropped files and keyboard shortcuts.
     fn handle_input_and_events(&mut self, ctx: &egui::Context) {
         for event in self.controller.poll(&self.settings) {
@@ -48,10 +105,26 @@ impl ViewerApp {
                         .scene_loaded
                         .get_or_insert(self.started.elapsed());
                     self.viewport.fit();
+                    self.expose_next_frame = self.settings.auto_exposure;
+                    self.restore_view(&path);
                     self.info(format!("opened {}", path.display()));
                     self.settings.remember_scene(path);
                 }
-                ControllerEvent::SceneFailed(e) => self.error(e),
+                ControllerEvent::SceneRelit => {
+                    if let Some(loaded) = &self.controller.scene {
+                        let text = format!("environment: {}", loaded.scene.info.lighting);
+                        self.info(text);
+                    }
+                }
+                ControllerEvent::SceneFailed(e) => {
+                    // A failed relight leaves the scene lit as it was: say so in the panel too.
+                    if let Some(loaded) = &self.controller.scene {
+                        self.settings.environment = loaded.lit_by.choice.clone();
+                        self.settings.environment_strength = loaded.lit_by.strength;
+                        self.settings.environment_rotation = loaded.lit_by.rotation;
+                    }
+                    self.error(e)
+                }
             }
         }
         self.poll_saves();
@@ -89,6 +162,13 @@ impl ViewerApp {
                 (Key::Num1, Command::OneToOne),
                 (Key::E, Command::ToggleErrorMap),
                 (Key::C, Command::ToggleReference),
+                (Key::Home, Command::ResetCamera),
+                (Key::ArrowLeft, turn(KEY_TURN, 0.0)),
+                (Key::ArrowRight, turn(-KEY_TURN, 0.0)),
+                (Key::ArrowUp, turn(0.0, -KEY_TURN)),
+                (Key::ArrowDown, turn(0.0, KEY_TURN)),
+                (Key::PageUp, dolly(1.0 / KEY_DOLLY)),
+                (Key::PageDown, dolly(KEY_DOLLY)),
             ];
             for (key, command) in keys {
                 if ctx.input(|i| i.key_pressed(key) && i.modifiers.is_none()) {
@@ -112,6 +192,10 @@ impl ViewerApp {
         if let Some(f) = current
             && f.passes > 0
         {
+            if self.expose_next_frame {
+                self.expose_next_frame = false;
+                self.settings.exposure = auto_exposure(&f.image);
+            }
             self.convergence.offer(&f.image, f.elapsed.as_secs_f64());
             if let Some(e) = f.error.as_ref() {
                 self.convergence
@@ -141,7 +225,7 @@ impl ViewerApp {
                 }
             } else {
                 ui.label(
-                    "Space pause · R restart · Ctrl+O open · Ctrl+S save · F fit · 1 one-to-one · E error map · C reference",
+                    "Space pause · R restart · Ctrl+O open · Ctrl+S save · F fit · 1 one-to-one · E error map · C reference · right drag orbit · Home camera",
                 );
             }
         });
@@ -156,6 +240,8 @@ impl ViewerApp {
             frame: current,
             resident_bytes: self.show_process_stats.then(resident_bytes).flatten(),
             threads: self.controller.session().map(|s| s.threads()),
+            camera_moved: self.view.is_some(),
+            cameras: scene.map_or(&[], |s| s.scene.cameras.as_slice()),
         };
         // In a short window the panel scrolls rather than cutting its statistics off.
         egui::ScrollArea::vertical()
@@ -258,6 +344,7 @@ impl eframe::App for ViewerApp {
         for c in commands {
             self.apply(c);
         }
+        self.move_camera_by_gestures();
         self.file_dialog(&ctx);
         self.automate(&ctx);
     }

@@ -18,7 +18,10 @@ pub enum Command {
     SetSeed(u64),
     TogglePause,
     Restart,
+    /// Set by the user: automatic exposure stops.
     SetExposure(f32),
+    /// Expose the next frame automatically, and each scene opened after.
+    SetAutoExposure(bool),
     SetToneCurve(ToneCurve),
     Fit,
     OneToOne,
@@ -30,6 +33,23 @@ pub enum Command {
     ToggleReference,
     ShowReferenceDialog,
     LoadReference(PathBuf),
+    /// Light the scene from outside with `auto`, `none`, `uniform`, `studio` or an image file.
+    SetEnvironment(String),
+    SetEnvironmentStrength(f32),
+    SetEnvironmentRotation(f32),
+    ShowEnvironmentDialog,
+    /// Move the camera: orbit by (yaw, pitch) radians, pan by (right, up) fractions of the
+    /// view's height, dolly by a factor on the distance.
+    MoveCamera {
+        orbit: [f32; 2],
+        pan: [f32; 2],
+        dolly: f32,
+    },
+    /// Back to the scene's camera (the file's, or the default one).
+    ResetCamera,
+    /// Look through the file's camera of this index, or (None) the default view that frames
+    /// the scene.
+    ChooseCamera(Option<usize>),
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -5,7 +5,9 @@
 //! helper thread.
 
 use crate::viewer::settings::ViewerSettings;
+use caustica_renderer::camera::CameraDesc;
 use caustica_renderer::integrators;
+use caustica_renderer::light::environment::EnvironmentSettings;
 use caustica_renderer::scene::{Scene, SceneError, gltf};
 use caustica_renderer::session::{Frame, FrameCallback, Session, SessionConfig};
 use caustica_renderer::transport::{self, Recommendation, TransportSurvey};
@@ -16,6 +18,8 @@ use std::sync::mpsc::{Receiver, TryRecvError, channel};
 pub struct LoadedScene {
     pub path: PathBuf,
     pub scene: Arc<Scene>,
+    /// The environment it was built with, as the settings named it.
+    pub lit_by: EnvironmentRequest,
     /// Its light transport and the estimator it needs: surveyed on the loading thread after
     /// the scene has started rendering (the survey traces paths for a second or two, which the
     /// first image must not wait for); None until then.
@@ -32,10 +36,42 @@ impl LoadedScene {
 /// What the loading thread sends: the scene, then a receiver for its survey.
 type Loaded = (Arc<Scene>, Receiver<(TransportSurvey, Recommendation)>);
 
+/// An environment as the viewer's settings name it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentRequest {
+    pub choice: String,
+    pub strength: f32,
+    pub rotation: f32,
+}
+
+impl EnvironmentRequest {
+    pub fn of(settings: &ViewerSettings) -> Self {
+        EnvironmentRequest {
+            choice: settings.environment.clone(),
+            strength: settings.environment_strength,
+            rotation: settings.environment_rotation,
+        }
+    }
+
+    fn resolve(&self) -> Result<EnvironmentSettings, String> {
+        EnvironmentSettings::resolve(&self.choice, self.strength, self.rotation)
+    }
+}
+
+/// A scene being loaded or relit.
+struct Loading {
+    path: PathBuf,
+    lit_by: EnvironmentRequest,
+    relight: bool,
+    arrives: Receiver<Result<Loaded, SceneError>>,
+}
+
 /// What happened in the background since the last poll.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ControllerEvent {
     SceneLoaded(PathBuf),
+    /// The scene was rebuilt with another environment.
+    SceneRelit,
     /// The load failed; the message names the file and the problem. The old scene stays.
     SceneFailed(String),
 }
@@ -50,10 +86,13 @@ pub enum ParamEffect {
 pub struct RenderController {
     pub scene: Option<LoadedScene>,
     session: Option<Session>,
-    loading: Option<(PathBuf, Receiver<Result<Loaded, SceneError>>)>,
+    loading: Option<Loading>,
     on_frame: FrameCallback,
     /// Sessions started so far, so tests and the status line can tell a restart happened.
     pub sessions_started: u64,
+    /// The view the user moved to, in place of the scene's camera; a newly opened scene
+    /// starts without one.
+    pub camera: Option<CameraDesc>,
 }
 
 fn drop_in_background(session: Session) {
@@ -69,36 +108,73 @@ impl RenderController {
             loading: None,
             on_frame,
             sessions_started: 0,
+            camera: None,
         }
     }
 
-    /// Starts loading a scene, and surveying its light transport for a `width` x `height`
-    /// image; the current one keeps rendering until the new one is ready.
-    pub fn open_scene(&mut self, path: PathBuf, width: u32, height: u32) {
+    /// Starts loading a scene, lit as `settings` say, and surveying its light transport for
+    /// the settings' image size; the current one keeps rendering until the new one is ready.
+    pub fn open_scene(&mut self, path: PathBuf, settings: &ViewerSettings) {
+        let lit_by = EnvironmentRequest::of(settings);
+        let load_path = path.clone();
+        self.build_in_background(path, settings, lit_by.clone(), false, move || {
+            let environment = lit_by.resolve().map_err(SceneError::new)?;
+            gltf::load_with_environment(&load_path, environment)
+        });
+    }
+
+    /// Relights the current scene with the environment `settings` name (an image file is read
+    /// on the loading thread); the scene renders on as it was until the new one is ready, and
+    /// stays as it was if the image cannot be read.
+    pub fn relight(&mut self, settings: &ViewerSettings) {
+        let Some(loaded) = &self.scene else {
+            return;
+        };
+        let (scene, path) = (loaded.scene.clone(), loaded.path.clone());
+        let lit_by = EnvironmentRequest::of(settings);
+        self.build_in_background(path, settings, lit_by.clone(), true, move || {
+            let environment = lit_by.resolve().map_err(SceneError::new)?;
+            Ok(scene.with_environment(environment))
+        });
+    }
+
+    /// Runs `build` on a thread of its own, then surveys what it built; `poll` collects both.
+    fn build_in_background(
+        &mut self,
+        path: PathBuf,
+        settings: &ViewerSettings,
+        lit_by: EnvironmentRequest,
+        relight: bool,
+        build: impl FnOnce() -> Result<Scene, SceneError> + Send + 'static,
+    ) {
         let (tx, rx) = channel();
         let notify = self.on_frame.clone();
-        let load_path = path.clone();
+        let (width, height) = (settings.width, settings.height);
         std::thread::spawn(move || {
-            let scene = match gltf::load(&load_path) {
-                Ok(scene) => scene,
+            let scene = match build() {
+                Ok(scene) => Arc::new(scene),
                 Err(e) => {
                     let _ = tx.send(Err(e));
                     notify();
                     return;
                 }
             };
-            let scene = Arc::new(scene);
             let (survey_tx, survey_rx) = channel();
             let _ = tx.send(Ok((scene.clone(), survey_rx)));
             notify();
             let _ = survey_tx.send(transport::analyse(&scene, width, height));
             notify();
         });
-        self.loading = Some((path, rx));
+        self.loading = Some(Loading {
+            path,
+            lit_by,
+            relight,
+            arrives: rx,
+        });
     }
 
     pub fn loading(&self) -> Option<&Path> {
-        self.loading.as_ref().map(|(p, _)| p.as_path())
+        self.loading.as_ref().map(|l| l.path.as_path())
     }
 
     /// Collects finished loads; a loaded scene replaces the current one and starts rendering.
@@ -110,10 +186,16 @@ impl RenderController {
             loaded.survey = Some(survey);
             loaded.survey_arrives = None;
         }
-        let Some((path, rx)) = &self.loading else {
+        let Some(Loading {
+            path,
+            lit_by,
+            relight,
+            arrives,
+        }) = &self.loading
+        else {
             return events;
         };
-        match rx.try_recv() {
+        match arrives.try_recv() {
             Err(TryRecvError::Empty) => {}
             Err(TryRecvError::Disconnected) => {
                 events.push(ControllerEvent::SceneFailed(format!(
@@ -127,17 +209,22 @@ impl RenderController {
                 self.loading = None;
             }
             Ok(Ok((scene, survey_arrives))) => {
-                let path = path.clone();
+                let (path, lit_by, relight) = (path.clone(), lit_by.clone(), *relight);
                 self.loading = None;
+                if !relight {
+                    self.camera = None;
+                }
                 self.scene = Some(LoadedScene {
                     path: path.clone(),
                     scene,
+                    lit_by,
                     survey: None,
                     survey_arrives: Some(survey_arrives),
                 });
-                match self.restart(settings) {
-                    Ok(()) => events.push(ControllerEvent::SceneLoaded(path)),
-                    Err(e) => events.push(ControllerEvent::SceneFailed(e)),
+                match (self.restart(settings), relight) {
+                    (Ok(()), false) => events.push(ControllerEvent::SceneLoaded(path)),
+                    (Ok(()), true) => events.push(ControllerEvent::SceneRelit),
+                    (Err(e), _) => events.push(ControllerEvent::SceneFailed(e)),
                 }
             }
         }
@@ -158,6 +245,7 @@ impl RenderController {
             threads: settings.threads,
             on_frame: Some(self.on_frame.clone()),
             background: true,
+            camera: self.camera,
             ..SessionConfig::new(scene, &settings.integrator, settings.width, settings.height)
         })
         .map_err(|e| e.to_string())?;

@@ -1,4 +1,4 @@
-//! The file dialogs: a scene to open or a reference to compare with.
+//! The file dialogs: a scene to open, a reference to compare with, an environment image.
 
 use crate::viewer::ViewerApp;
 use crate::viewer::command::Command;
@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 pub(super) enum DialogPurpose {
     Scene,
     Reference,
+    Environment,
 }
 
 impl ViewerApp {
@@ -27,6 +28,10 @@ impl ViewerApp {
             DialogPurpose::Reference => {
                 Box::new(|p: &Path| p.extension().is_some_and(|e| e == "exr"))
             }
+            DialogPurpose::Environment => Box::new(|p: &Path| {
+                p.extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("hdr"))
+            }),
         };
         let mut dialog = egui_file::FileDialog::open_file().show_files_filter(filter);
         if let Some(start) = start {
@@ -46,6 +51,9 @@ impl ViewerApp {
                 self.apply(match purpose {
                     DialogPurpose::Scene => Command::OpenScene(path),
                     DialogPurpose::Reference => Command::LoadReference(path),
+                    DialogPurpose::Environment => {
+                        Command::SetEnvironment(path.display().to_string())
+                    }
                 });
             }
             self.open_dialog = None;

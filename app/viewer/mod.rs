@@ -8,6 +8,7 @@ pub mod controller;
 pub mod convergence;
 pub mod dialogs;
 pub mod error_map;
+pub mod navigation;
 pub mod panels;
 pub mod plots;
 pub mod repaint;

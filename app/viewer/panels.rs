@@ -3,8 +3,10 @@
 
 use crate::viewer::command::Command;
 use crate::viewer::settings::ViewerSettings;
+use caustica_renderer::camera::CameraDesc;
 use caustica_renderer::image::ToneCurve;
 use caustica_renderer::integrators::{self, ParamSpec};
+use caustica_renderer::light::environment::EnvironmentChoice;
 use caustica_renderer::scene::SceneInfo;
 use caustica_renderer::session::{Frame, MAX_RESOLUTION, RunState};
 use caustica_renderer::transport::Recommendation;
@@ -21,6 +23,10 @@ pub struct PanelStatus<'a> {
     pub resident_bytes: Option<u64>,
     /// Worker threads of the running render.
     pub threads: Option<usize>,
+    /// The user has moved the camera away from the scene's.
+    pub camera_moved: bool,
+    /// The file's cameras, named.
+    pub cameras: &'a [(String, CameraDesc)],
 }
 
 /// A numeric control that reports a value once the user is done with it: at once for live
@@ -92,6 +98,9 @@ pub fn side_panel(
         ui.heading("Scene");
         scene_section(ui, settings, status, &mut out);
         ui.separator();
+        ui.heading("Environment");
+        environment_section(ui, settings, status, &mut out);
+        ui.separator();
         ui.heading("Render");
         render_section(ui, settings, status, &mut out);
         ui.separator();
@@ -142,6 +151,7 @@ fn scene_section(
         for w in &info.warnings {
             ui.label(RichText::new(format!("warning: {w}")).small());
         }
+        camera_row(ui, status, info, out);
     }
     if let Some(r) = status.recommendation {
         recommendation(ui, settings, r, out);
@@ -161,6 +171,124 @@ fn scene_section(
             });
         }
     });
+}
+
+/// The camera: which one, the file's cameras and the default view to choose from, and a reset
+/// once the user has moved it.
+fn camera_row(ui: &mut egui::Ui, status: &PanelStatus, info: &SceneInfo, out: &mut Vec<Command>) {
+    ui.horizontal(|ui| {
+        let shown = match (status.camera_moved, info.default_camera) {
+            (true, _) => "moved".to_string(),
+            (false, true) => "default view".to_string(),
+            (false, false) => status
+                .cameras
+                .first()
+                .map_or("the file's".to_string(), |(name, _)| name.clone()),
+        };
+        egui::ComboBox::from_label("camera")
+            .selected_text(shown)
+            .show_ui(ui, |ui| {
+                for (i, (name, _)) in status.cameras.iter().enumerate() {
+                    if ui.selectable_label(false, name).clicked() {
+                        out.push(Command::ChooseCamera(Some(i)));
+                    }
+                }
+                if ui
+                    .selectable_label(false, "default view")
+                    .on_hover_text("a three-quarter view that frames the scene")
+                    .clicked()
+                {
+                    out.push(Command::ChooseCamera(None));
+                }
+            })
+            .response
+            .on_hover_text(
+                "right drag orbits, middle or Shift + right drag pans, Ctrl + wheel dollies; \
+                 arrow keys orbit, Page Up and Down dolly; Home resets",
+            );
+        if status.camera_moved && ui.button("Reset").on_hover_text("Home").clicked() {
+            out.push(Command::ResetCamera);
+        }
+    });
+}
+
+/// The default-lighting rule, as the panel explains it.
+const AUTO_RULE: &str = "Auto lights a model meant to be lit by its viewer with the studio: one \
+without light sources, or whose emitters are small details (their power spread over the \
+scene's surface gives under 5 % of the studio's light). A scene with punctual lights or \
+brighter emitters keeps its own lighting and gets no environment.";
+
+/// What lights the scene from outside: the choice (the rule's, or the user's), an image file,
+/// the strength and rotation (each change relights the scene and restarts the render).
+fn environment_section(
+    ui: &mut egui::Ui,
+    settings: &ViewerSettings,
+    status: &PanelStatus,
+    out: &mut Vec<Command>,
+) {
+    let named = EnvironmentChoice::NAMED;
+    let is_file = !named.contains(&settings.environment.as_str());
+    let shown = if is_file {
+        Path::new(&settings.environment)
+            .file_name()
+            .map_or(settings.environment.clone(), |n| {
+                n.to_string_lossy().into_owned()
+            })
+    } else {
+        settings.environment.clone()
+    };
+    egui::ComboBox::from_label("environment")
+        .selected_text(shown)
+        .show_ui(ui, |ui| {
+            for name in named {
+                if ui
+                    .selectable_label(settings.environment == name, name)
+                    .on_hover_text(match name {
+                        "auto" => AUTO_RULE,
+                        "none" => "nothing: only the scene's own lights",
+                        "uniform" => "radiance 1 from every direction",
+                        _ => "the built-in studio: soft boxes over a gradient, so metals show reflections",
+                    })
+                    .clicked()
+                    && settings.environment != name
+                {
+                    out.push(Command::SetEnvironment(name.to_string()));
+                }
+            }
+            if ui.button("Image file…").on_hover_text("an equirectangular .hdr or .exr").clicked() {
+                out.push(Command::ShowEnvironmentDialog);
+                ui.close();
+            }
+        })
+        .response
+        .on_hover_text(AUTO_RULE);
+    if let Some((_, info)) = status.scene {
+        ui.label(RichText::new(format!("lit by {}", info.lighting)).small());
+    }
+    let mut strength = settings.environment_strength;
+    let response = ui
+        .add(
+            egui::Slider::new(&mut strength, 0.0..=100.0)
+                .logarithmic(true)
+                .text("strength"),
+        )
+        .on_hover_text("multiplies the environment's radiance (restarts)");
+    if commit_value(&response, false) && strength != settings.environment_strength {
+        out.push(Command::SetEnvironmentStrength(strength));
+    }
+    let mut rotation = settings.environment_rotation;
+    let response = ui
+        .add(
+            egui::Slider::new(&mut rotation, -180.0..=180.0)
+                .suffix("°")
+                .text("rotation"),
+        )
+        .on_hover_text(
+            "turns the environment about the up axis, counter-clockwise seen from above (restarts)",
+        );
+    if commit_value(&response, false) && rotation != settings.environment_rotation {
+        out.push(Command::SetEnvironmentRotation(rotation));
+    }
 }
 
 /// The integrator and its parameters, size, threads, seed; pause and restart.
@@ -258,12 +386,25 @@ fn render_section(
 /// Exposure and tone curve, the view, saving, and what is drawn.
 fn display_section(ui: &mut egui::Ui, settings: &ViewerSettings, out: &mut Vec<Command>) {
     let mut exposure = settings.exposure;
-    if ui
-        .add(egui::Slider::new(&mut exposure, -10.0..=10.0).text("exposure (EV)"))
-        .changed()
-    {
-        out.push(Command::SetExposure(exposure));
-    }
+    ui.horizontal(|ui| {
+        if ui
+            .add(egui::Slider::new(&mut exposure, -20.0..=20.0).text("exposure (EV)"))
+            .changed()
+        {
+            out.push(Command::SetExposure(exposure));
+        }
+        let mut auto = settings.auto_exposure;
+        if ui
+            .checkbox(&mut auto, "auto")
+            .on_hover_text(
+                "set from the first frame of each scene opened: the 97th percentile of the lit \
+                 pixels' luminance at 90 % of white; moving the exposure turns it off",
+            )
+            .changed()
+        {
+            out.push(Command::SetAutoExposure(auto));
+        }
+    });
     let mut curve = settings.tone_curve;
     egui::ComboBox::from_label("tone curve")
         .selected_text(curve.name())

@@ -22,11 +22,23 @@ pub struct ViewerSettings {
     pub threads: usize,
     pub seed: u64,
     pub exposure: f32,
+    /// Set the exposure from the first frame of each scene opened (`exposure::auto_exposure`);
+    /// off once the user moves the exposure.
+    pub auto_exposure: bool,
     pub tone_curve: ToneCurve,
     pub recent_scenes: Vec<PathBuf>,
     pub show_plots: bool,
     /// Lay the estimated-error heat map over the image.
     pub show_error_map: bool,
+    /// What lights scenes from outside: `auto`, `none`, `uniform`, `studio` or an image file
+    /// (`EnvironmentSettings::resolve` reads it).
+    pub environment: String,
+    pub environment_strength: f32,
+    /// Degrees about +Y.
+    pub environment_rotation: f32,
+    /// The last view the user moved to and its scene (the camera as the EXR header's JSON),
+    /// restored when that scene is opened again.
+    pub view: Option<(PathBuf, String)>,
 }
 
 impl Default for ViewerSettings {
@@ -40,10 +52,15 @@ impl Default for ViewerSettings {
             threads: 0,
             seed: 0,
             exposure: 0.0,
+            auto_exposure: true,
             tone_curve: ToneCurve::Linear,
             recent_scenes: Vec::new(),
             show_plots: true,
             show_error_map: false,
+            environment: "auto".into(),
+            environment_strength: 1.0,
+            environment_rotation: 0.0,
+            view: None,
         }
     }
 }
@@ -75,6 +92,15 @@ impl ViewerSettings {
         self.height = self.height.clamp(1, MAX_RESOLUTION);
         if !self.exposure.is_finite() {
             self.exposure = 0.0;
+        }
+        if !(self.environment_strength.is_finite() && self.environment_strength >= 0.0) {
+            self.environment_strength = 1.0;
+        }
+        if !self.environment_rotation.is_finite() {
+            self.environment_rotation = 0.0;
+        }
+        if self.environment.is_empty() {
+            self.environment = "auto".into();
         }
         self
     }
@@ -115,8 +141,14 @@ mod tests {
         let mut bad = s.clone();
         bad.params.insert("max_depth".into(), 1e9);
         bad.exposure = f32::NAN;
+        bad.environment_strength = -1.0;
+        bad.environment_rotation = f32::INFINITY;
         let fixed = bad.sanitized();
         assert_eq!(fixed.params["max_depth"], 64.0);
         assert_eq!(fixed.exposure, 0.0);
+        assert_eq!(
+            (fixed.environment_strength, fixed.environment_rotation),
+            (1.0, 0.0)
+        );
     }
 }

@@ -8,11 +8,15 @@ use crate::viewer::controller::{ParamEffect, RenderController};
 use crate::viewer::convergence::Convergence;
 use crate::viewer::dialogs::DialogPurpose;
 use crate::viewer::error_map::ErrorMap;
+use crate::viewer::navigation::Orbit;
 use crate::viewer::repaint::ProgressRepaint;
 use crate::viewer::settings::{STORAGE_KEY, ViewerSettings};
 use crate::viewer::tonemap;
 use crate::viewer::viewport::{HoveredPixel, Viewport};
+use caustica_renderer::camera::CameraDesc;
+use caustica_renderer::exposure::EXPOSURE_RANGE;
 use caustica_renderer::integrators;
+use caustica_renderer::metadata::camera_to_json;
 use caustica_renderer::session::{MAX_RESOLUTION, RunState};
 use eframe::egui;
 use std::path::PathBuf;
@@ -67,6 +71,11 @@ pub struct ViewerApp {
     pub show_reference: bool,
     /// Paces the redraws that show the render's progress.
     pub(super) progress: Arc<ProgressRepaint>,
+    /// The camera as the user moved it; None shows the scene's own.
+    pub view: Option<Orbit>,
+    /// The next frame with a finished pass sets the exposure (a scene was opened with
+    /// automatic exposure on, or the user turned it on).
+    pub(super) expose_next_frame: bool,
 }
 
 impl ViewerApp {
@@ -92,6 +101,8 @@ impl ViewerApp {
             settings: settings.sanitized(),
             controller: RenderController::new(Arc::new(move || on_frame.request())),
             progress,
+            expose_next_frame: false,
+            view: None,
             show_reference: false,
             convergence: Convergence::new(Arc::new(move || on_measured.request())),
             error_map: ErrorMap::default(),
@@ -148,9 +159,62 @@ impl ViewerApp {
     /// Carries out a command.
     pub fn apply(&mut self, command: Command) {
         match command {
-            Command::OpenScene(path) => {
-                self.controller
-                    .open_scene(path, self.settings.width, self.settings.height)
+            Command::OpenScene(path) => self.controller.open_scene(path, &self.settings),
+            Command::SetEnvironment(choice) => {
+                self.settings.environment = choice;
+                self.controller.relight(&self.settings);
+            }
+            Command::SetEnvironmentStrength(strength) => {
+                if strength.is_finite() && strength >= 0.0 {
+                    self.settings.environment_strength = strength;
+                    self.controller.relight(&self.settings);
+                }
+            }
+            Command::SetEnvironmentRotation(degrees) => {
+                if degrees.is_finite() {
+                    self.settings.environment_rotation = degrees;
+                    self.controller.relight(&self.settings);
+                }
+            }
+            Command::ShowEnvironmentDialog => self.show_dialog(DialogPurpose::Environment),
+            Command::MoveCamera { orbit, pan, dolly } => {
+                let Some(loaded) = &self.controller.scene else {
+                    return;
+                };
+                let scene = &loaded.scene;
+                let view = self
+                    .view
+                    .get_or_insert_with(|| Orbit::from_camera(&scene.camera, &scene.bounds));
+                view.rotate(orbit[0], orbit[1]);
+                view.pan(pan[0], pan[1]);
+                view.dolly(dolly);
+                self.controller.camera = Some(view.camera());
+                self.settings.view = Some((loaded.path.clone(), camera_to_json(&view.camera())));
+                self.restart();
+            }
+            Command::ChooseCamera(choice) => {
+                let Some(loaded) = &self.controller.scene else {
+                    return;
+                };
+                let scene = &loaded.scene;
+                let camera = match choice {
+                    Some(i) => match scene.cameras.get(i) {
+                        Some((_, camera)) => *camera,
+                        None => return,
+                    },
+                    None => CameraDesc::framing(&scene.bounds),
+                };
+                self.view = Some(Orbit::from_camera(&camera, &scene.bounds));
+                self.controller.camera = Some(camera);
+                self.settings.view = Some((loaded.path.clone(), camera_to_json(&camera)));
+                self.restart();
+            }
+            Command::ResetCamera => {
+                self.view = None;
+                self.settings.view = None;
+                if self.controller.camera.take().is_some() {
+                    self.restart();
+                }
             }
             Command::UseRecommended => {
                 let Some(r) = self
@@ -209,7 +273,15 @@ impl ViewerApp {
                 }
             }
             Command::Restart => self.restart(),
-            Command::SetExposure(ev) => self.settings.exposure = ev.clamp(-20.0, 20.0),
+            Command::SetExposure(ev) => {
+                self.settings.exposure = ev.clamp(-EXPOSURE_RANGE, EXPOSURE_RANGE);
+                self.settings.auto_exposure = false;
+                self.expose_next_frame = false;
+            }
+            Command::SetAutoExposure(on) => {
+                self.settings.auto_exposure = on;
+                self.expose_next_frame = on;
+            }
             Command::SetToneCurve(c) => self.settings.tone_curve = c,
             Command::Fit => self.viewport.fit(),
             Command::OneToOne => {

@@ -1,5 +1,6 @@
 //! The image view: fit to the panel or a chosen zoom, zoom about the cursor with the wheel,
-//! pan by dragging, and a pixel inspector on hover. The pixels are drawn by the GPU tone
+//! pan by dragging, and a pixel inspector on hover; the camera's gestures (right drag, middle
+//! drag, Ctrl + wheel) are collected for the app to turn into camera moves. The pixels are drawn by the GPU tone
 //! mapper (`tonemap`); the frame is uploaded only when a new one arrived.
 
 use crate::viewer::error_map;
@@ -11,6 +12,20 @@ use eframe::egui::{self, Pos2, Rect, Sense, Vec2};
 use eframe::egui_wgpu;
 use std::sync::Arc;
 use std::time::Duration;
+
+/// Mouse moves that move the camera, in fractions of the view's height (wheel: its points).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CameraGesture {
+    pub orbit: Vec2,
+    pub pan: Vec2,
+    pub dolly: f32,
+}
+
+impl CameraGesture {
+    pub fn is_empty(&self) -> bool {
+        *self == CameraGesture::default()
+    }
+}
 
 /// The pixel under the cursor.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -24,6 +39,8 @@ pub struct HoveredPixel {
 pub struct Viewport {
     /// Screen points per image pixel; None fits the image to the panel.
     zoom: Option<f32>,
+    /// Camera gestures since the app last took them.
+    gesture: CameraGesture,
     /// Image coordinates at the panel's centre (used when not fitting).
     center: Vec2,
     uploaded: Option<Arc<Image>>,
@@ -35,6 +52,11 @@ pub struct Viewport {
 }
 
 impl Viewport {
+    /// The camera gestures made since the last call.
+    pub fn take_gesture(&mut self) -> CameraGesture {
+        std::mem::take(&mut self.gesture)
+    }
+
     pub fn fit(&mut self) {
         self.zoom = None;
     }
@@ -80,9 +102,24 @@ impl Viewport {
             self.center = size / 2.0;
         }
 
+        // The camera's gestures: right drag orbits, middle (or Shift + right) drag pans,
+        // Ctrl + wheel dollies; as fractions of the view's height.
+        let height = rect.height().max(1.0);
+        let shift = ui.input(|i| i.modifiers.shift);
+        if response.dragged_by(egui::PointerButton::Secondary) && !shift {
+            self.gesture.orbit += response.drag_delta() / height;
+        }
+        if response.dragged_by(egui::PointerButton::Middle)
+            || (response.dragged_by(egui::PointerButton::Secondary) && shift)
+        {
+            self.gesture.pan += response.drag_delta() / height;
+        }
+        let ctrl = ui.input(|i| i.modifiers.command);
         if let Some(cursor) = response.hover_pos() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
-            if scroll != 0.0 {
+            if scroll != 0.0 && ctrl {
+                self.gesture.dolly += scroll;
+            } else if scroll != 0.0 {
                 // Zoom about the cursor: the image point under it stays under it.
                 let under = self.center + (cursor - rect.center()) / zoom;
                 let new_zoom = (zoom * (scroll * 0.002).exp()).clamp(fit.min(1.0) * 0.1, 256.0);
@@ -91,7 +128,7 @@ impl Viewport {
                 self.zoom = Some(zoom);
             }
         }
-        if response.dragged() {
+        if response.dragged_by(egui::PointerButton::Primary) {
             self.center -= response.drag_delta() / zoom;
             self.zoom = Some(zoom);
         }

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Renders the images README shows under "Default lighting": the bundled material spheres
+# (a model without light sources) as the old default lit them, by a uniform environment of
+# radiance 1, and as the default rule lights them now, by the studio; and the studio turned
+# half way round. PNG, automatic exposure, 512 x 256, 256 samples per pixel of the path tracer.
+# Usage (about 5 minutes on 2 cores): bash app/docs/lighting/render.sh
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+cargo build --release -q
+bin=target/release/caustica
+out=app/docs/lighting
+common=(--width 512 --height 256 --spp 256 --seed 1)
+"$bin" render assets/material-spheres.gltf -o "$out/spheres-uniform.png" "${common[@]}" --environment uniform
+"$bin" render assets/material-spheres.gltf -o "$out/spheres-studio.png" "${common[@]}"
+"$bin" render assets/material-spheres.gltf -o "$out/spheres-studio-turned.png" "${common[@]}" \
+  --environment studio --environment-rotation 180

@@ -1,0 +1,60 @@
+//! The environment flags every command that loads a scene shares: what lights the scene from
+//! outside, how strongly, and turned how far about the up axis.
+
+use anyhow::anyhow;
+use caustica_renderer::light::environment::EnvironmentSettings;
+use caustica_renderer::scene::{Scene, gltf};
+use clap::Args;
+use std::path::Path;
+
+#[derive(Args, Debug, Clone, Default)]
+pub struct EnvironmentFlags {
+    /// What lights the scene from outside: `auto` (the built-in studio for a model meant to be
+    /// lit by its viewer, nothing for a scene with its own lights; README says the rule),
+    /// `none`, `uniform` (radiance 1 everywhere), `studio`, or an equirectangular .hdr or .exr
+    /// image.
+    #[arg(
+        long,
+        value_name = "auto|none|uniform|studio|FILE",
+        default_value = "auto"
+    )]
+    pub environment: String,
+    /// Multiplies the environment's radiance.
+    #[arg(long, value_name = "S", default_value_t = 1.0, value_parser = parse_strength, allow_negative_numbers = true)]
+    pub environment_strength: f32,
+    /// Turns the environment about the up axis (+Y), counter-clockwise seen from above.
+    #[arg(long, value_name = "DEGREES", default_value_t = 0.0, value_parser = parse_degrees, allow_negative_numbers = true)]
+    pub environment_rotation: f32,
+}
+
+impl EnvironmentFlags {
+    /// The settings, with an environment image read (an error names the file and the problem).
+    pub fn settings(&self) -> anyhow::Result<EnvironmentSettings> {
+        EnvironmentSettings::resolve(
+            &self.environment,
+            self.environment_strength,
+            self.environment_rotation,
+        )
+        .map_err(|e| anyhow!(e))
+    }
+
+    /// Loads and builds `scene` lit as these flags say.
+    pub fn load(&self, scene: &Path) -> anyhow::Result<Scene> {
+        let settings = self.settings()?;
+        gltf::load_with_environment(scene, settings).map_err(|e| anyhow!(e))
+    }
+}
+
+fn parse_strength(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("'{s}' is not a strength (a number, 0 or more)")),
+    }
+}
+
+fn parse_degrees(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("'{s}' is not an angle in degrees")),
+    }
+}
