@@ -11,8 +11,8 @@ use crate::light::environment_map::{EnvironmentMap, uv_to_direction};
 use glam::{Vec2, Vec3};
 use std::sync::{Arc, OnceLock};
 
-const WIDTH: usize = 1024;
-const HEIGHT: usize = 512;
+const WIDTH: usize = 512;
+const HEIGHT: usize = 256;
 
 /// A soft box: where it is (towards it, from the model), its angular radius and the width of
 /// its soft edge in radians, and its radiance.
