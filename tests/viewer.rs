@@ -58,6 +58,14 @@ fn set_slider(h: &mut Harness<'static, ViewerApp>, label: &str, value: f64) {
     h.run_steps(2);
 }
 
+/// Steps until the render has finished another pass.
+fn keeps_rendering(h: &mut Harness<'static, ViewerApp>, what: &str) {
+    let passes = h.state().controller.frame().unwrap().passes;
+    step_until(h, what, |a| {
+        a.controller.frame().is_some_and(|f| f.passes > passes)
+    });
+}
+
 fn rendering(app: &ViewerApp) -> bool {
     app.controller.frame().is_some_and(|f| f.passes >= 2)
 }
@@ -157,10 +165,7 @@ fn ctrl_s_saves_a_readable_exr_snapshot_with_metadata() {
             .text
             .contains("missing/deeper")
     );
-    let passes = h.state().controller.frame().unwrap().passes;
-    step_until(&mut h, "more passes", |a| {
-        a.controller.frame().is_some_and(|f| f.passes > passes)
-    });
+    keeps_rendering(&mut h, "more passes");
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -194,10 +199,7 @@ fn a_broken_scene_shows_its_error_and_the_old_scene_stays() {
         !app.settings.recent_scenes.contains(&broken),
         "a failed scene is not a recent one"
     );
-    let passes = app.controller.frame().unwrap().passes;
-    step_until(&mut h, "the old scene to keep rendering", |a| {
-        a.controller.frame().is_some_and(|f| f.passes > passes)
-    });
+    keeps_rendering(&mut h, "the old scene to keep rendering");
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -750,10 +752,7 @@ fn the_environment_panel_relights_the_scene_and_a_bad_image_keeps_the_light() {
     assert!(last.is_error && last.text.contains("sky.hdr"), "{last:?}");
     assert_eq!(h.state().settings.environment, "studio");
     assert!(lighting(h.state()).contains(&format!("strength {strength}")));
-    let passes = h.state().controller.frame().unwrap().passes;
-    step_until(&mut h, "the scene to keep rendering", |a| {
-        a.controller.frame().is_some_and(|f| f.passes > passes)
-    });
+    keeps_rendering(&mut h, "the scene to keep rendering");
     std::fs::remove_dir_all(dir).unwrap();
 }
 

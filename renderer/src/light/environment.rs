@@ -110,8 +110,9 @@ pub struct Environment {
     pub radiance: EnvironmentRadiance,
     /// Multiplies the radiance.
     pub strength: f32,
-    /// The map's frame in the world: a rotation about +Y.
+    /// The map's frame in the world: a rotation about +Y; and back.
     to_world: Mat3,
+    to_map: Mat3,
     pub scene_radius: f32,
 }
 
@@ -123,10 +124,12 @@ impl Environment {
         rotation_degrees: f32,
         scene_radius: f32,
     ) -> Environment {
+        let to_world = Mat3::from_rotation_y(rotation_degrees.to_radians());
         Environment {
             radiance,
             strength,
-            to_world: Mat3::from_rotation_y(rotation_degrees.to_radians()),
+            to_world,
+            to_map: to_world.transpose(),
             scene_radius,
         }
     }
@@ -146,7 +149,7 @@ impl Environment {
         self.strength
             * match &self.radiance {
                 EnvironmentRadiance::Uniform(l) => *l,
-                EnvironmentRadiance::Map(map) => map.radiance(self.to_world.transpose() * w),
+                EnvironmentRadiance::Map(map) => map.radiance(self.to_map * w),
             }
     }
 
@@ -182,7 +185,7 @@ impl Environment {
     pub fn pdf_li(&self, wi: Vec3) -> f32 {
         match &self.radiance {
             EnvironmentRadiance::Uniform(_) => uniform_sphere_pdf(),
-            EnvironmentRadiance::Map(map) => map.pdf(self.to_world.transpose() * wi),
+            EnvironmentRadiance::Map(map) => map.pdf(self.to_map * wi),
         }
     }
 
