@@ -209,6 +209,67 @@ fn every_camera_is_read_and_the_first_is_the_scenes() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// A PNG of a few bytes whose header declares 20000 x 20000 texels (1.6 GB decoded): the
+/// texture is refused from its header, with a warning naming the size and the limit, before
+/// anything is decoded; the scene loads without it.
+#[test]
+fn an_image_declaring_too_many_texels_is_refused_before_decoding() {
+    use base64::Engine;
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut crc = !0u32;
+        for &b in bytes {
+            crc ^= u32::from(b);
+            for _ in 0..8 {
+                crc = if crc & 1 != 0 {
+                    (crc >> 1) ^ 0xEDB8_8320
+                } else {
+                    crc >> 1
+                };
+            }
+        }
+        !crc
+    }
+    fn chunk(kind: &[u8; 4], data: &[u8]) -> Vec<u8> {
+        let mut out = (data.len() as u32).to_be_bytes().to_vec();
+        let mut body = kind.to_vec();
+        body.extend_from_slice(data);
+        out.extend_from_slice(&body);
+        out.extend_from_slice(&crc32(&body).to_be_bytes());
+        out
+    }
+    let mut header = 20000u32.to_be_bytes().to_vec();
+    header.extend_from_slice(&20000u32.to_be_bytes());
+    header.extend_from_slice(&[8, 6, 0, 0, 0]);
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    png.extend(chunk(b"IHDR", &header));
+    png.extend(chunk(
+        b"IDAT",
+        &[0x78, 0x9c, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01],
+    ));
+    png.extend(chunk(b"IEND", &[]));
+    let uri = format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&png)
+    );
+    let dir = temp_dir("huge-image");
+    let mut v = to_gltf(&cornell_box(false));
+    v["images"] = json!([{"uri": uri}]);
+    v["textures"] = json!([{"source": 0}]);
+    v["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    let scene = load(&write_json(&dir, "huge.gltf", &v)).unwrap();
+    assert!(scene.textures.is_empty());
+    assert!(
+        scene
+            .info
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("image 0: declares 20000 x 20000 texels, over the limit")),
+        "{:?}",
+        scene.info.warnings
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn punctual_lights_transforms_and_mirrored_nodes() {
     let dir = temp_dir("punctual");

@@ -38,6 +38,9 @@ const READ_FROM_JSON: &[&str] = &[
 
 const MAX_NODE_DEPTH: usize = 256;
 
+/// The most texels an image may declare (8192 x 8192, 256 MiB as RGBA8).
+pub const MAX_TEXELS: u64 = 8192 * 8192;
+
 /// Loads and builds a scene from a glTF file, lit from outside as the default rule says.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     load_with_environment(path, EnvironmentSettings::default())
@@ -908,10 +911,59 @@ impl Loader<'_> {
         Ok(self.texture(&texture, tex_coord, transform, srgb))
     }
 
+    /// The size an image's header declares, refused above `MAX_TEXELS` before anything is
+    /// decoded: a few hundred kilobytes of PNG can declare 20000 x 20000 texels, gigabytes
+    /// once decoded. Headers that cannot be read are left to the decoder to report.
+    fn check_image_size(&self, image: &gltf::Image) -> Result<(), String> {
+        let from_uri;
+        let bytes: &[u8] = match image.source() {
+            gltf::image::Source::View { view, .. } => {
+                let buffer = &self.buffers[view.buffer().index()];
+                &buffer[view.offset()..view.offset() + view.length()]
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                match gltf::buffer::Data::from_source_and_blob(
+                    gltf::buffer::Source::Uri(uri),
+                    Some(self.base),
+                    &mut None,
+                ) {
+                    Ok(data) => {
+                        from_uri = data.0;
+                        &from_uri
+                    }
+                    Err(_) => return Ok(()),
+                }
+            }
+        };
+        let Ok(reader) = image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format()
+        else {
+            return Ok(());
+        };
+        let Ok((width, height)) = reader.into_dimensions() else {
+            return Ok(());
+        };
+        if u64::from(width) * u64::from(height) > MAX_TEXELS {
+            return Err(format!(
+                "declares {width} x {height} texels, over the limit of {MAX_TEXELS} ({} MiB \
+                 decoded; 8192 x 8192 is the largest texture in common use)",
+                MAX_TEXELS * 4 >> 20
+            ));
+        }
+        Ok(())
+    }
+
     /// Decodes an image once, to RGBA8; None (with a warning) when it cannot be read.
     fn image_rgba8(&mut self, image: &gltf::Image) -> Option<(usize, usize, Vec<u8>)> {
         if let Some(cached) = self.images.get(&image.index()) {
             return cached.clone();
+        }
+        if let Err(problem) = self.check_image_size(image) {
+            self.desc.warnings.push(format!(
+                "image {}: {problem}; texture ignored",
+                image.index()
+            ));
+            self.images.insert(image.index(), None);
+            return None;
         }
         let decoded =
             match gltf::image::Data::from_source(image.source(), Some(self.base), self.buffers) {
