@@ -125,9 +125,32 @@ pub fn write_exr(
     })
 }
 
-/// Reads the first RGB(A) layer of an EXR and its `caustica:` attributes.
+/// The most pixels an EXR read here may have (16384 x 8192, an equirectangular 16K
+/// environment: 1.5 GiB as float RGB).
+pub const MAX_EXR_PIXELS: usize = 16384 * 8192;
+
+/// Reads the first RGB(A) layer of an EXR and its `caustica:` attributes. The header's size
+/// is checked against `MAX_EXR_PIXELS` before any pixel is allocated: a small file can
+/// declare a huge image.
 pub fn read_exr(path: &Path) -> Result<(Image, BTreeMap<String, String>), ImageError> {
     use exr::prelude::*;
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| io_error(path, e))?;
+    if let Some(header) = meta.headers.first() {
+        let size = header.layer_size;
+        if size
+            .0
+            .checked_mul(size.1)
+            .is_none_or(|n| n > MAX_EXR_PIXELS)
+        {
+            return Err(io_error(
+                path,
+                format!(
+                    "declares {} x {} pixels, over the limit of {MAX_EXR_PIXELS} (16384 x 8192)",
+                    size.0, size.1
+                ),
+            ));
+        }
+    }
     let image = read_first_rgba_layer_from_file(
         path,
         |resolution, _| crate::image::Image::new(resolution.width(), resolution.height()),

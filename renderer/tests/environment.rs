@@ -316,6 +316,20 @@ fn maps_load_from_hdr_and_exr_files_and_bad_files_are_named() {
             "{error}"
         );
     }
+    // An EXR whose header declares 20000 x 20000 pixels is refused from its header, before
+    // any pixel is allocated (its data window patched into a 4 x 2 file).
+    let mut bytes = std::fs::read(&exr).unwrap();
+    let key = b"dataWindow\0box2i\0";
+    let at = bytes.windows(key.len()).position(|w| w == key).unwrap() + key.len() + 4;
+    bytes[at + 8..at + 12].copy_from_slice(&19999i32.to_le_bytes());
+    bytes[at + 12..at + 16].copy_from_slice(&19999i32.to_le_bytes());
+    let huge = dir.join("huge.exr");
+    std::fs::write(&huge, &bytes).unwrap();
+    let error = EnvironmentMap::load(&huge).unwrap_err();
+    assert!(
+        error.contains("huge.exr") && error.contains("declares 20000 x 20000"),
+        "{error}"
+    );
     // Radiance that is not finite or negative is refused, naming the texel.
     let mut bad = vec![Vec3::ONE; 8];
     bad[5] = Vec3::new(1.0, f32::NAN, 1.0);
