@@ -58,7 +58,7 @@ pub struct ConvergeArgs {
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
     #[command(flatten)]
-    pub environment: crate::environment_flags::EnvironmentFlags,
+    pub scene_flags: crate::scene_flags::SceneFlags,
     /// Checkpoints per decade of time.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub checkpoints_per_decade: u32,
@@ -388,7 +388,7 @@ pub fn run(args: &ConvergeArgs) -> Result<(), crate::render::Failure> {
         .map(|p| read_exr(p).map(|(image, _)| image))
         .transpose()
         .map_err(|e| anyhow!("reference: {e}"))?;
-    let scene = Arc::new(args.environment.load(&args.scene)?);
+    let scene = Arc::new(args.scene_flags.load(&args.scene)?);
     let (width, height) = image_size(args, &scene, reference.as_ref());
     let mut specs = specs;
     for spec in specs.iter_mut().filter(|s| s.recommended) {

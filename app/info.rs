@@ -13,11 +13,11 @@ pub struct InfoArgs {
     #[command(flatten)]
     pub size: crate::render::SizeArgs,
     #[command(flatten)]
-    pub environment: crate::environment_flags::EnvironmentFlags,
+    pub scene_flags: crate::scene_flags::SceneFlags,
 }
 
 pub fn run(args: &InfoArgs) -> Result<(), crate::render::Failure> {
-    let scene = args.environment.load(&args.scene)?;
+    let scene = args.scene_flags.load(&args.scene)?;
     let (width, height) = args.size.resolve(scene.camera.aspect);
     let started = Instant::now();
     let (s, r) = transport::analyse(&scene, width, height);

@@ -6,12 +6,12 @@
 
 mod chart;
 mod converge;
-mod environment_flags;
 mod info;
 mod merge;
 mod param_flags;
 mod reference;
 mod render;
+mod scene_flags;
 
 use caustica::viewer::{self, Automation, ViewerOptions};
 use caustica_renderer::session::MAX_RESOLUTION;
@@ -59,6 +59,8 @@ struct Cli {
     /// (to measure the UI frame rate the render leaves).
     #[arg(long, requires = "screenshot")]
     animate: bool,
+    #[command(flatten)]
+    limits: scene_flags::LimitFlags,
 }
 
 #[derive(Subcommand, Debug)]
@@ -131,6 +133,7 @@ fn main() -> ExitCode {
                 window_size: cli.window_size,
                 launched: Some(launched),
                 automation,
+                limits: cli.limits.limits(),
             };
             match viewer::run(options) {
                 Ok(()) => ExitCode::SUCCESS,

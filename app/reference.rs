@@ -22,7 +22,7 @@ pub struct ReferenceArgs {
     #[command(flatten)]
     pub size: crate::render::SizeArgs,
     #[command(flatten)]
-    pub environment: crate::environment_flags::EnvironmentFlags,
+    pub scene_flags: crate::scene_flags::SceneFlags,
     /// Seed (a reference for runs of seed 0 is best rendered with another).
     #[arg(long, default_value_t = 1_000_000)]
     pub seed: u64,
@@ -46,7 +46,7 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
             args.output.display()
         )));
     }
-    let scene = args.environment.load(&args.scene)?;
+    let scene = args.scene_flags.load(&args.scene)?;
     let (width, height) = args.size.resolve(scene.camera.aspect);
     let survey = transport::survey_at(&scene, width, height);
     let r = survey.reference(width, height, &scene.camera);
@@ -69,8 +69,9 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
         },
         stats: args.stats.clone(),
         exposure: crate::render::Exposure::Auto,
-        environment: args.environment.clone(),
+        scene_flags: args.scene_flags.clone(),
         camera_from: None,
+        panic_in_pass: None,
     };
     crate::render::run(&render)
 }

@@ -38,7 +38,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub size: SizeArgs,
     #[command(flatten)]
-    pub environment: crate::environment_flags::EnvironmentFlags,
+    pub scene_flags: crate::scene_flags::SceneFlags,
     /// Render the view saved in this EXR's header (`caustica:camera`, written by the viewer's
     /// and the command line's snapshots) in place of the scene's camera.
     #[arg(long, value_name = "FILE.exr")]
@@ -61,6 +61,9 @@ pub struct RenderArgs {
     /// pixels' luminance shown at 90 % of white (README, "Exposure").
     #[arg(long, default_value = "auto", value_parser = parse_exposure, allow_negative_numbers = true)]
     pub exposure: Exposure,
+    /// Fault injection for the tests: a worker thread panics during this pass.
+    #[arg(long, hide = true, value_name = "PASS")]
+    pub panic_in_pass: Option<u64>,
 }
 
 /// An exposure in stops, or automatic.
@@ -195,7 +198,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         .into());
     }
 
-    let scene = Arc::new(args.environment.load(&args.scene)?);
+    let scene = Arc::new(args.scene_flags.load(&args.scene)?);
     let si = &scene.info;
     eprintln!(
         "{}: {} triangles, {} lights, loaded in {:.1} ms (BVH {:.1} ms)",
@@ -227,6 +230,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         time_limit: args.time.map(Duration::from_secs_f64),
         target_rel_mse: args.until_error,
         camera,
+        panic_in_pass: args.panic_in_pass,
         ..SessionConfig::new(scene.clone(), info.name, width, height)
     })
     .map_err(|e| match e {
@@ -299,6 +303,15 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         }
     }
     .with_context(|| "cannot write the image".to_string())?;
+    if let Some(failure) = &frame.failure {
+        // The image of the passes before the failure was saved above: hours of rendering are
+        // not lost to one bad pass.
+        return Err(anyhow!(
+            "{failure}; the image of those passes was saved to {}",
+            args.output.display()
+        )
+        .into());
+    }
     if let Some(path) = &args.stats {
         let stats = serde_json::json!({
             "integrator": info.name,

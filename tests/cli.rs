@@ -153,6 +153,44 @@ fn runtime_errors_exit_1_naming_the_file() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("/nonexistent-dir"), "{}", stderr(&o));
     assert!(!out.exists(), "nothing is written on failure");
+
+    // A limit names itself, the size asked for and the flag that raises it.
+    let o = render("assets/door.gltf", &out, "--max-triangles 100 --spp 1");
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("assets/door.gltf"), "{e}");
+    assert!(
+        e.contains("over the limit of 100 (raise it with --max-triangles)"),
+        "{e}"
+    );
+    assert!(!out.exists(), "nothing is written on failure");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A worker thread that panics in pass 3 of 10: exit 1 with the reason, and the image of the
+/// 3 passes before it saved where -o said, its header saying 3 passes.
+#[test]
+fn a_panicking_pass_exits_1_and_saves_the_passes_before() {
+    let dir = temp_dir("panic");
+    let out = dir.join("partial.exr");
+    let o = render(
+        "assets/cornell-box.gltf",
+        &out,
+        "--spp 10 --width 32 --height 24 --panic-in-pass 3",
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains(&format!(
+            "error: the renderer failed after 3 passes: fault injected in pass 3; the image of \
+             those passes was saved to {}",
+            out.display()
+        )),
+        "{e}"
+    );
+    let (image, meta) = read_exr(&out).unwrap();
+    assert_eq!(meta["passes"], "3");
+    assert!(image.mean_luminance() > 0.0);
     std::fs::remove_dir_all(dir).unwrap();
 }
 

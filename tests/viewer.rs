@@ -891,3 +891,50 @@ fn the_camera_orbits_pans_and_dollies_and_the_view_is_saved() {
     let framing = caustica_renderer::camera::CameraDesc::framing(&scene.bounds);
     assert_eq!(h.state().controller.camera, Some(framing));
 }
+
+/// A pass that panics on a worker thread: the viewer says so in its status line, keeps the
+/// image of the passes before (which Ctrl+S still saves), and a restart renders again.
+#[test]
+fn a_panicking_pass_is_reported_and_the_render_restarts() {
+    let dir = std::env::temp_dir().join(format!("caustica-viewer-panic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut h = harness(Some(asset("cornell-box.gltf")));
+    h.state_mut().snapshot_dir = dir.clone();
+    step_until(&mut h, "the first frames", rendering);
+    h.state_mut().controller.panic_in_pass = Some(2);
+    h.state_mut().apply(Command::Restart);
+    step_until(&mut h, "the failure reported", |a| {
+        a.messages.last().is_some_and(|m| m.is_error)
+    });
+    let text = h.state().messages.last().unwrap().text.clone();
+    assert!(
+        text.starts_with("the renderer failed after 2 passes: fault injected in pass 2"),
+        "{text}"
+    );
+    h.get_by_label_contains("the renderer failed after 2 passes");
+    let frame = h.state().controller.frame().unwrap();
+    assert_eq!((frame.state, frame.passes), (RunState::Failed, 2));
+    assert!(frame.image.mean_luminance() > 0.0);
+
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    step_until(&mut h, "the save", |a| {
+        a.messages.iter().any(|m| m.text.starts_with("saved"))
+    });
+    let saved = std::fs::read_dir(&dir)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let (image, _) = read_exr(&saved).unwrap();
+    assert_eq!(image.pixels, frame.image.pixels);
+
+    h.state_mut().controller.panic_in_pass = None;
+    h.key_press(egui::Key::R);
+    step_until(&mut h, "rendering again", |a| {
+        a.controller
+            .frame()
+            .is_some_and(|f| f.state == RunState::Running && f.passes >= 3)
+    });
+    std::fs::remove_dir_all(dir).unwrap();
+}

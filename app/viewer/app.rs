@@ -125,6 +125,9 @@ impl ViewerApp {
                     }
                     self.error(e)
                 }
+                ControllerEvent::RenderFailed(e) => self.error(format!(
+                    "{e}. The image so far is kept (Ctrl+S saves it); R restarts"
+                )),
             }
         }
         self.poll_saves();

@@ -8,6 +8,7 @@ use crate::viewer::settings::ViewerSettings;
 use caustica_renderer::camera::CameraDesc;
 use caustica_renderer::integrators;
 use caustica_renderer::light::environment::EnvironmentSettings;
+use caustica_renderer::scene::limits::LoadLimits;
 use caustica_renderer::scene::{Scene, SceneError, gltf};
 use caustica_renderer::session::{Frame, FrameCallback, Session, SessionConfig};
 use caustica_renderer::transport::{self, Recommendation, TransportSurvey};
@@ -74,6 +75,9 @@ pub enum ControllerEvent {
     SceneRelit,
     /// The load failed; the message names the file and the problem. The old scene stays.
     SceneFailed(String),
+    /// The session's render failed (a pass panicked): why. Its image stays, and any restart
+    /// starts a new session.
+    RenderFailed(String),
 }
 
 /// How a parameter change took effect.
@@ -93,6 +97,12 @@ pub struct RenderController {
     /// The view the user moved to, in place of the scene's camera; a newly opened scene
     /// starts without one.
     pub camera: Option<CameraDesc>,
+    /// What a scene file may ask for (the command line can raise each limit).
+    pub limits: LoadLimits,
+    /// The current session's failure has been reported.
+    failure_reported: bool,
+    /// Fault injection for the tests: the sessions started panic during this pass.
+    pub panic_in_pass: Option<u64>,
 }
 
 fn drop_in_background(session: Session) {
@@ -109,6 +119,9 @@ impl RenderController {
             on_frame,
             sessions_started: 0,
             camera: None,
+            limits: LoadLimits::default(),
+            failure_reported: false,
+            panic_in_pass: None,
         }
     }
 
@@ -116,10 +129,10 @@ impl RenderController {
     /// the settings' image size; the current one keeps rendering until the new one is ready.
     pub fn open_scene(&mut self, path: PathBuf, settings: &ViewerSettings) {
         let lit_by = EnvironmentRequest::of(settings);
-        let load_path = path.clone();
+        let (load_path, limits) = (path.clone(), self.limits);
         self.build_in_background(path, settings, lit_by.clone(), false, move || {
             let environment = lit_by.resolve().map_err(SceneError::new)?;
-            gltf::load_with_environment(&load_path, environment)
+            gltf::load_with(&load_path, environment, &limits)
         });
     }
 
@@ -180,6 +193,12 @@ impl RenderController {
     /// Collects finished loads; a loaded scene replaces the current one and starts rendering.
     pub fn poll(&mut self, settings: &ViewerSettings) -> Vec<ControllerEvent> {
         let mut events = Vec::new();
+        if !self.failure_reported
+            && let Some(failure) = self.frame().and_then(|f| f.failure.clone())
+        {
+            self.failure_reported = true;
+            events.push(ControllerEvent::RenderFailed(failure.to_string()));
+        }
         if let Some(loaded) = &mut self.scene
             && let Some(Ok(survey)) = loaded.survey_arrives.as_ref().map(|rx| rx.try_recv())
         {
@@ -246,12 +265,14 @@ impl RenderController {
             on_frame: Some(self.on_frame.clone()),
             background: true,
             camera: self.camera,
+            panic_in_pass: self.panic_in_pass,
             ..SessionConfig::new(scene, &settings.integrator, settings.width, settings.height)
         })
         .map_err(|e| e.to_string())?;
         if let Some(old) = self.session.replace(session) {
             drop_in_background(old);
         }
+        self.failure_reported = false;
         self.sessions_started += 1;
         Ok(())
     }

@@ -17,6 +17,7 @@ use caustica_renderer::camera::CameraDesc;
 use caustica_renderer::exposure::EXPOSURE_RANGE;
 use caustica_renderer::integrators;
 use caustica_renderer::metadata::camera_to_json;
+use caustica_renderer::scene::limits::LoadLimits;
 use caustica_renderer::session::{MAX_RESOLUTION, RunState};
 use eframe::egui;
 use std::path::PathBuf;
@@ -40,6 +41,8 @@ pub struct ViewerOptions {
     pub window_size: Option<[f32; 2]>,
     /// Scripted run for tests: save a screenshot after some seconds of rendering, then quit.
     pub automation: Option<Automation>,
+    /// What a scene file may ask for.
+    pub limits: LoadLimits,
 }
 
 /// The viewer: its settings and view on the UI thread, the render and the loads in the
@@ -119,6 +122,7 @@ impl ViewerApp {
             screenshot_requested: false,
             started: options.launched.unwrap_or_else(Instant::now),
         };
+        app.controller.limits = options.limits;
         if let Some(name) = options.integrator {
             app.apply(Command::SetIntegrator(name.clone()));
             if app.settings.integrator != name {

@@ -129,37 +129,47 @@ pub fn write_exr(
 /// environment: 1.5 GiB as float RGB).
 pub const MAX_EXR_PIXELS: usize = 16384 * 8192;
 
-/// Reads the first RGB(A) layer of an EXR and its `caustica:` attributes. The header's size
-/// is checked against `MAX_EXR_PIXELS` before any pixel is allocated: a small file can
-/// declare a huge image.
+/// Reads the first RGB(A) layer of an EXR and its `caustica:` attributes; errors name the
+/// file.
 pub fn read_exr(path: &Path) -> Result<(Image, BTreeMap<String, String>), ImageError> {
+    let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
+    exr_from_bytes(&bytes).map_err(|e| io_error(path, e))
+}
+
+/// The first RGB(A) layer of the EXR file `bytes` and its `caustica:` attributes. Every
+/// header's size is checked against `MAX_EXR_PIXELS` before any pixel is allocated: a small
+/// file can declare a huge image.
+pub fn exr_from_bytes(bytes: &[u8]) -> Result<(Image, BTreeMap<String, String>), String> {
     use exr::prelude::*;
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| io_error(path, e))?;
-    if let Some(header) = meta.headers.first() {
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| e.to_string())?;
+    for header in &meta.headers {
         let size = header.layer_size;
         if size
             .0
             .checked_mul(size.1)
             .is_none_or(|n| n > MAX_EXR_PIXELS)
         {
-            return Err(io_error(
-                path,
-                format!(
-                    "declares {} x {} pixels, over the limit of {MAX_EXR_PIXELS} (16384 x 8192)",
-                    size.0, size.1
-                ),
+            return Err(format!(
+                "declares {} x {} pixels, over the limit of {MAX_EXR_PIXELS} (16384 x 8192)",
+                size.0, size.1
             ));
         }
     }
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |resolution, _| crate::image::Image::new(resolution.width(), resolution.height()),
-        |img: &mut crate::image::Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            let w = img.width;
-            img.pixels[pos.y() * w + pos.x()] = Vec3::new(r, g, b);
-        },
-    )
-    .map_err(|e| io_error(path, e))?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |resolution, _| crate::image::Image::new(resolution.width(), resolution.height()),
+            |img: &mut crate::image::Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                let w = img.width;
+                img.pixels[pos.y() * w + pos.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| e.to_string())?;
     let mut metadata = BTreeMap::new();
     for (k, v) in &image.layer_data.attributes.other {
         if let (Some(key), AttributeValue::Text(text)) =

@@ -25,6 +25,7 @@ pub mod color;
 pub mod error_estimate;
 pub mod exposure;
 pub mod film;
+pub mod fuzzing;
 pub mod geometry;
 pub mod image;
 pub mod integrators;

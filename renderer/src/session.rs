@@ -49,6 +49,9 @@ pub struct SessionConfig {
     pub on_frame: Option<FrameCallback>,
     /// A view in place of the scene's camera (the viewer's orbit, `--camera-from`).
     pub camera: Option<CameraDesc>,
+    /// Fault injection, for the tests of what a failure leaves: a worker thread panics during
+    /// this pass (counted from 0).
+    pub panic_in_pass: Option<u64>,
 }
 
 pub type FrameCallback = Arc<dyn Fn() + Send + Sync>;
@@ -72,6 +75,7 @@ impl SessionConfig {
             background: false,
             on_frame: None,
             camera: None,
+            panic_in_pass: None,
         }
     }
 }
@@ -83,6 +87,9 @@ pub enum RunState {
     /// Reached its pass or time limit, or its target error.
     Finished,
     Cancelled,
+    /// A pass panicked (`Frame::failure` says where and why); the image is that of the
+    /// passes before it, and a new session starts afresh.
+    Failed,
 }
 
 /// A snapshot of a session: the normalised estimate and its counters.
@@ -118,6 +125,8 @@ pub struct Frame {
     /// While the integrator prepares (MMLT's bootstrap), the share done; its image is then
     /// already an estimate, but no pass is counted yet.
     pub preparation: Option<f32>,
+    /// Why the session failed, when `state` is `Failed`.
+    pub failure: Option<Arc<str>>,
 }
 
 impl Frame {
@@ -200,7 +209,6 @@ impl Session {
             camera,
             seed: config.seed,
         };
-        let integrator = (info.create)(ctx.clone(), &params);
         let shared = Arc::new(Shared {
             frame: ArcSwap::from_pointee(Frame {
                 image: Arc::new(Image::new(w as usize, h as usize)),
@@ -219,6 +227,7 @@ impl Session {
                 state: RunState::Running,
                 preview: false,
                 preparation: None,
+                failure: None,
             }),
             cancel: AtomicBool::new(false),
             paused: Mutex::new(false),
@@ -226,21 +235,34 @@ impl Session {
             live_changes: Mutex::new(Vec::new()),
         });
         let worker_shared = shared.clone();
+        let worker_params = params.clone();
         let worker = std::thread::Builder::new()
             .name("caustica-session".into())
             .spawn(move || {
-                run(
-                    worker_shared,
-                    ctx,
-                    integrator,
-                    pool,
-                    Limits {
-                        passes: config.max_passes,
-                        time: config.time_limit,
-                        rel_mse: config.target_rel_mse,
-                    },
-                    config.on_frame,
-                )
+                let limits = Limits {
+                    passes: config.max_passes,
+                    time: config.time_limit,
+                    rel_mse: config.target_rel_mse,
+                };
+                let on_frame = config.on_frame.clone();
+                // A panic anywhere in the run (the integrator's buffers, a pass on any worker
+                // thread, an estimate) ends this session with the image it had, and says why;
+                // the pool and the integrator, in whatever state the panic left them, go.
+                let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    let integrator = (info.create)(ctx.clone(), &worker_params);
+                    run(
+                        worker_shared.clone(),
+                        ctx,
+                        integrator,
+                        pool,
+                        limits,
+                        config.panic_in_pass,
+                        on_frame,
+                    )
+                }));
+                if let Err(payload) = outcome {
+                    fail(&worker_shared, payload.as_ref(), config.on_frame.as_ref());
+                }
             })
             .map_err(|e| SessionError::Threads(e.to_string()))?;
         Ok(Session {
@@ -287,7 +309,10 @@ impl Session {
     }
 
     pub fn is_done(&self) -> bool {
-        matches!(self.frame().state, RunState::Finished | RunState::Cancelled)
+        matches!(
+            self.frame().state,
+            RunState::Finished | RunState::Cancelled | RunState::Failed
+        )
     }
 
     /// Asks the workers to stop; the pass under way is abandoned.
@@ -442,12 +467,33 @@ impl Limits {
     }
 }
 
+/// Publishes the last frame of a session whose run panicked with `payload`: the image of the
+/// passes before, the state `Failed` and the panic's message.
+fn fail(shared: &Shared, payload: &(dyn std::any::Any + Send), on_frame: Option<&FrameCallback>) {
+    let message = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic without a message".into());
+    let last = shared.frame.load_full();
+    let passes = last.passes;
+    shared.frame.store(Arc::new(Frame {
+        state: RunState::Failed,
+        failure: Some(format!("the renderer failed after {passes} passes: {message}").into()),
+        ..(*last).clone()
+    }));
+    if let Some(notify) = on_frame {
+        notify();
+    }
+}
+
 fn run(
     shared: Arc<Shared>,
     ctx: RenderContext,
     mut integrator: Box<dyn Integrator>,
     pool: rayon::ThreadPool,
     limits: Limits,
+    panic_in_pass: Option<u64>,
     on_frame: Option<FrameCallback>,
 ) {
     let start = Instant::now();
@@ -484,6 +530,7 @@ fn run(
             state,
             preview: false,
             preparation,
+            failure: None,
         });
     };
     // Something of the scene at once, however long the first pass takes.
@@ -545,7 +592,13 @@ fn run(
             integrator.set_live_param(&name, value);
         }
         let preparing = integrator.preparing().is_some();
-        match pool.install(|| integrator.render_pass(passes, &shared.cancel)) {
+        let pass = || {
+            if panic_in_pass == Some(passes) {
+                rayon::scope(|s| s.spawn(|_| panic!("fault injected in pass {passes}")));
+            }
+            integrator.render_pass(passes, &shared.cancel)
+        };
+        match pool.install(pass) {
             // A preparation step: shown, counted in the totals, but not a pass.
             Ok(stats) if preparing => {
                 totals = totals + stats;

@@ -452,7 +452,7 @@ fn broken_files_give_errors_naming_file_and_problem() {
 
     let mut v = good.clone();
     v["nodes"][0]["children"] = json!([0]);
-    expect_error(&write_json(&dir, "cyclic.gltf", &v), "glTF");
+    expect_error(&write_json(&dir, "cyclic.gltf", &v), "has a cycle");
 
     expect_error(&dir.join("does-not-exist.gltf"), "cannot read file");
     std::fs::remove_dir_all(dir).unwrap();
@@ -1340,4 +1340,121 @@ fn an_enclosed_camera_without_light_inside_is_named_in_a_warning() {
     assert!(enclosed(sky.clone()));
     sky.camera = None;
     assert!(!enclosed(sky), "the default camera is outside the model");
+}
+
+/// Nodes that share children, each level referring twice to the next (40 levels, 2^40 paths
+/// to the mesh): each node is walked once, with a warning, not 2^40 times.
+#[test]
+fn shared_nodes_are_walked_once() {
+    let dir = temp_dir("shared-nodes");
+    let mut v = to_gltf(&cornell_box(false));
+    let meshes = v["meshes"].as_array().unwrap().len();
+    let levels = 40;
+    let mut nodes = v["nodes"].as_array().unwrap().clone();
+    // Level i holds nodes first + 2i and first + 2i + 1, both parents of both at level i + 1.
+    let first = nodes.len();
+    for i in 0..levels {
+        let next = first + 2 * (i + 1);
+        let children = if i + 1 < levels {
+            json!([next, next + 1])
+        } else {
+            json!((0..meshes).collect::<Vec<_>>())
+        };
+        nodes.push(json!({"children": children}));
+        nodes.push(json!({"children": children}));
+    }
+    v["nodes"] = Value::Array(nodes);
+    v["scenes"][0]["nodes"] = json!([first, first + 1]);
+    let desc = load_description(&write_json(&dir, "shared.gltf", &v)).unwrap();
+    let plain = cornell_box(false);
+    let triangles = |d: &SceneDescription| d.meshes.iter().map(|m| m.indices.len()).sum::<usize>();
+    assert_eq!(triangles(&desc), triangles(&plain));
+    assert_eq!(
+        desc.warnings
+            .iter()
+            .filter(|w| w.contains("reached a second time"))
+            .count(),
+        1,
+        "{:?}",
+        desc.warnings
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Each limit refuses what exceeds it, naming the size, the limit and the flag that raises
+/// it; the same file loads within the default limits.
+#[test]
+fn files_over_a_load_limit_are_refused_naming_the_limit_and_its_flag() {
+    use caustica_renderer::scene::gltf::load_description_with;
+    use caustica_renderer::scene::limits::LoadLimits;
+    let dir = temp_dir("limits");
+    let refusal = |path: &Path, limits: LoadLimits| {
+        load_description_with(path, &limits)
+            .unwrap_err()
+            .to_string()
+    };
+    let defaults = LoadLimits::default();
+
+    // Triangles, counted per instance: every mesh instanced 30 more times.
+    let mut v = to_gltf(&cornell_box(false));
+    let meshes = v["meshes"].as_array().unwrap().len();
+    let mut nodes = v["nodes"].as_array().unwrap().clone();
+    for copy in 0..30 {
+        for m in 0..meshes {
+            nodes.push(json!({"mesh": m, "translation": [copy as f32 * 3.0, 0.0, 0.0]}));
+        }
+    }
+    v["nodes"] = Value::Array(nodes.clone());
+    v["scenes"][0]["nodes"] = json!((0..nodes.len()).collect::<Vec<_>>());
+    let path = write_json(&dir, "instances.gltf", &v);
+    let one = cornell_box(false)
+        .meshes
+        .iter()
+        .map(|m| m.indices.len() as u64 / 3)
+        .sum::<u64>();
+    let limits = LoadLimits {
+        max_triangles: one * 10,
+        ..defaults
+    };
+    let e = refusal(&path, limits);
+    assert!(e.starts_with(&path.display().to_string()), "{e}");
+    assert!(
+        e.contains(&format!("over the limit of {}", one * 10)),
+        "{e}"
+    );
+    assert!(e.contains("(raise it with --max-triangles)"), "{e}");
+    let desc = load_description_with(&path, &defaults).unwrap();
+    assert_eq!(
+        desc.meshes
+            .iter()
+            .map(|m| m.indices.len() as u64 / 3)
+            .sum::<u64>(),
+        one * 31
+    );
+
+    // Buffers: the declared length, and an external file's size, before anything is read.
+    let (json, bin) = split_buffer(to_gltf(&cornell_box(false)));
+    let mut external = json.clone();
+    external["buffers"][0]["uri"] = json!("box.bin");
+    std::fs::write(dir.join("box.bin"), &bin).unwrap();
+    let path = write_json(&dir, "external.gltf", &external);
+    let limits = LoadLimits {
+        max_buffer_bytes: bin.len() as u64 - 1,
+        ..defaults
+    };
+    let e = refusal(&path, limits);
+    assert!(
+        e.contains(&format!("the buffers hold {} bytes", bin.len())),
+        "{e}"
+    );
+    assert!(e.contains("(raise it with --max-buffer-bytes)"), "{e}");
+    let mut declared = external.clone();
+    declared["buffers"][0]["byteLength"] = json!(1u64 << 40);
+    let e = refusal(&write_json(&dir, "declared.gltf", &declared), defaults);
+    assert!(
+        e.contains(&format!("the buffers hold {} bytes", 1u64 << 40)),
+        "{e}"
+    );
+    load_description_with(&path, &defaults).unwrap();
+    std::fs::remove_dir_all(dir).unwrap();
 }

@@ -280,3 +280,39 @@ fn every_integrator_reports_the_memory_of_its_buffers() {
         }
     }
 }
+
+/// A pass that panics on a worker thread ends the session as `Failed`, saying where and why,
+/// with exactly the image of the passes before it (the same as a run stopped there); a panic
+/// in the first pass leaves no estimate; either way the next session renders.
+#[test]
+fn a_panicking_pass_fails_the_session_and_keeps_the_passes_before() {
+    for integrator in ["pt", "sppm", "mmlt"] {
+        let of = |passes, panic_in_pass| SessionConfig {
+            integrator: integrator.into(),
+            panic_in_pass,
+            ..config(Some(passes))
+        };
+        let failed = Session::start(of(10, Some(3))).unwrap().wait();
+        assert_eq!(
+            (failed.state, failed.passes),
+            (RunState::Failed, 3),
+            "{integrator}"
+        );
+        assert_eq!(
+            failed.failure.as_deref(),
+            Some("the renderer failed after 3 passes: fault injected in pass 3"),
+            "{integrator}"
+        );
+        let stopped = Session::start(of(3, None)).unwrap().wait();
+        assert_eq!(stopped.state, RunState::Finished);
+        assert_eq!(failed.image.pixels, stopped.image.pixels, "{integrator}");
+        assert!(failed.image.mean_luminance() > 0.0, "{integrator}");
+
+        let first = Session::start(of(10, Some(0))).unwrap().wait();
+        assert_eq!(
+            (first.state, first.passes),
+            (RunState::Failed, 0),
+            "{integrator}"
+        );
+    }
+}

@@ -1,12 +1,14 @@
 //! glTF 2.0 loader (`.gltf` with external or embedded buffers, and `.glb`), interpreting the
 //! file exactly as DESIGN.md section 2 says. Bad input is an error naming the file and the
 //! problem, never a panic: buffer views and accessors are bounds-checked before anything
-//! reads them, the node graph is walked with a depth limit, and as a last line of defence a
-//! panic inside the gltf crate is caught and reported as an error.
+//! reads them, the node graph is walked once per node with a depth limit, images, buffers
+//! and triangles are counted against [`LoadLimits`] before they are allocated, and as a last
+//! line of defence a panic inside the gltf crate is caught and reported as an error.
 
 use crate::camera::{CameraDesc, Projection};
 use crate::light::environment::EnvironmentSettings;
 use crate::material::{AlphaMode, Material, TextureRef};
+use crate::scene::limits::LoadLimits;
 use crate::scene::{MeshDesc, PunctualLightDesc, Scene, SceneDescription, SceneError};
 use crate::texture::{Texture, Wrap};
 use glam::{Affine2, Affine3A, Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
@@ -38,21 +40,20 @@ const READ_FROM_JSON: &[&str] = &[
 
 const MAX_NODE_DEPTH: usize = 256;
 
-/// The most texels an image may declare (8192 x 8192, 256 MiB as RGBA8).
-pub const MAX_TEXELS: u64 = 8192 * 8192;
-
 /// Loads and builds a scene from a glTF file, lit from outside as the default rule says.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    load_with_environment(path, EnvironmentSettings::default())
+    load_with(path, EnvironmentSettings::default(), &LoadLimits::default())
 }
 
-/// Loads and builds a scene from a glTF file with the environment `environment`.
-pub fn load_with_environment(
+/// Loads and builds a scene from a glTF file with the environment `environment`, refusing
+/// what exceeds `limits`.
+pub fn load_with(
     path: &Path,
     environment: EnvironmentSettings,
+    limits: &LoadLimits,
 ) -> Result<Scene, SceneError> {
     let start = Instant::now();
-    let mut desc = load_description(path)?;
+    let mut desc = load_description_with(path, limits)?;
     desc.environment = environment;
     let mut scene = Scene::build(desc).map_err(|e| e.in_file(path))?;
     scene.info.load_time = start.elapsed();
@@ -61,7 +62,27 @@ pub fn load_with_environment(
 
 /// Reads a glTF file into a scene description (no BVH yet).
 pub fn load_description(path: &Path) -> Result<SceneDescription, SceneError> {
-    let result = std::panic::catch_unwind(|| read(path));
+    load_description_with(path, &LoadLimits::default())
+}
+
+/// Reads a glTF file into a scene description, refusing what exceeds `limits`.
+pub fn load_description_with(
+    path: &Path,
+    limits: &LoadLimits,
+) -> Result<SceneDescription, SceneError> {
+    let result = std::panic::catch_unwind(|| {
+        let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read file: {e}")))?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        description_from_bytes(
+            &bytes,
+            path.parent().unwrap_or(Path::new(".")),
+            &name,
+            limits,
+        )
+    });
     match result {
         Ok(r) => r.map_err(|e| e.in_file(path)),
         Err(_) => Err(SceneError::new("the glTF reader failed on malformed data").in_file(path)),
@@ -72,9 +93,16 @@ fn err(problem: impl Into<String>) -> SceneError {
     SceneError::new(problem)
 }
 
-fn read(path: &Path) -> Result<SceneDescription, SceneError> {
-    let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read file: {e}")))?;
-    let (mut root, blob) = parse(&bytes)?;
+/// Reads the bytes of a `.gltf` or `.glb` file into a scene description named `name`, with
+/// external files resolved against `base`. Unlike [`load_description`] a panic is not caught:
+/// the fuzz targets call this, so that every panic is found and fixed.
+pub fn description_from_bytes(
+    bytes: &[u8],
+    base: &Path,
+    name: &str,
+    limits: &LoadLimits,
+) -> Result<SceneDescription, SceneError> {
+    let (mut root, blob) = parse(bytes)?;
     for ext in &root.extensions_required {
         if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
             return Err(err(format!(
@@ -95,22 +123,22 @@ fn read(path: &Path) -> Result<SceneDescription, SceneError> {
         .retain(|ext| !READ_FROM_JSON.contains(&ext.as_str()));
     // Validate after the extension check, so an unknown required extension is named as such.
     let document = validated(root)?;
-    let base = path.parent().unwrap_or(Path::new("."));
-    let buffers = load_buffers(&document, base, blob)?;
+    let buffers = load_buffers(&document, base, blob, limits)?;
     check_views_and_accessors(&document, &buffers)?;
 
     let mut loader = Loader {
         document: &document,
         buffers: &buffers,
         base,
+        limits,
         desc: SceneDescription {
-            name: path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default(),
+            name: name.to_string(),
             warnings: ignored_extensions,
             ..Default::default()
         },
+        visited: vec![Visit::NotYet; document.nodes().len()],
+        revisited: false,
+        triangles: 0,
         material_index: HashMap::new(),
         texture_index: HashMap::new(),
         images: HashMap::new(),
@@ -259,7 +287,28 @@ fn load_buffers(
     document: &gltf::Document,
     base: &Path,
     mut blob: Option<Vec<u8>>,
+    limits: &LoadLimits,
 ) -> Result<Vec<gltf::buffer::Data>, SceneError> {
+    // Declared lengths first, and an external file's size before it is read: data URIs and
+    // the GLB chunk are in memory already.
+    let mut total: u64 = 0;
+    for buffer in document.buffers() {
+        let mut size = buffer.length() as u64;
+        if let gltf::buffer::Source::Uri(uri) = buffer.source()
+            && !uri.starts_with("data:")
+            && let Ok(meta) = std::fs::metadata(base.join(uri))
+        {
+            size = size.max(meta.len());
+        }
+        total = total.saturating_add(size);
+    }
+    if total > limits.max_buffer_bytes {
+        return Err(err(LoadLimits::refusal(
+            &format!("the buffers hold {total} bytes"),
+            limits.max_buffer_bytes,
+            "--max-buffer-bytes",
+        )));
+    }
     let mut buffers = Vec::new();
     for buffer in document.buffers() {
         let name = match buffer.source() {
@@ -402,10 +451,27 @@ struct Loader<'a> {
     document: &'a gltf::Document,
     buffers: &'a [gltf::buffer::Data],
     base: &'a Path,
+    limits: &'a LoadLimits,
     desc: SceneDescription,
+    /// Nodes reached so far: a node has at most one parent (spec 3.5.2), and a file that
+    /// shares one, each level referring twice to the next, would otherwise be walked 2^depth
+    /// times.
+    visited: Vec<Visit>,
+    revisited: bool,
+    /// Triangles so far, instances counted each time.
+    triangles: u64,
     material_index: HashMap<Option<usize>, u32>,
     texture_index: HashMap<(usize, bool), u32>,
     images: HashMap<usize, Option<(usize, usize, Vec<u8>)>>,
+}
+
+/// Where the walk of the node graph is with a node.
+#[derive(Clone, Copy, PartialEq)]
+enum Visit {
+    NotYet,
+    /// Its subtree is being walked: reaching it again is a cycle.
+    Walking,
+    Done,
 }
 
 fn rigid(m: Mat4) -> Affine3A {
@@ -425,6 +491,26 @@ impl Loader<'_> {
                 "the node hierarchy is deeper than {MAX_NODE_DEPTH} (a cycle?)"
             )));
         }
+        match self.visited[node.index()] {
+            Visit::NotYet => {}
+            Visit::Walking => {
+                return Err(err(format!(
+                    "node {} is its own ancestor: the node hierarchy has a cycle",
+                    node.index()
+                )));
+            }
+            Visit::Done if !self.revisited => {
+                self.revisited = true;
+                self.desc.warnings.push(format!(
+                    "node {} is reached a second time and shown once: a node has one parent \
+                     at most, and a scene's roots none (glTF 2.0, 3.5.2)",
+                    node.index()
+                ));
+                return Ok(());
+            }
+            Visit::Done => return Ok(()),
+        }
+        self.visited[node.index()] = Visit::Walking;
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         let world = parent * local;
         if !world.is_finite() {
@@ -485,6 +571,7 @@ impl Loader<'_> {
         for child in node.children() {
             self.visit(&child, world, depth + 1)?;
         }
+        self.visited[node.index()] = Visit::Done;
         Ok(())
     }
 
@@ -610,6 +697,17 @@ impl Loader<'_> {
                     indices.len() % 3
                 ));
                 indices.truncate(indices.len() / 3 * 3);
+            }
+            self.triangles += indices.len() as u64 / 3;
+            if self.triangles > self.limits.max_triangles {
+                return Err(err(LoadLimits::refusal(
+                    &format!(
+                        "{name}: the scene holds {} triangles so far, each instance counted",
+                        self.triangles
+                    ),
+                    self.limits.max_triangles,
+                    "--max-triangles",
+                )));
             }
             if flip {
                 for tri in indices.chunks_exact_mut(3) {
@@ -911,7 +1009,7 @@ impl Loader<'_> {
         Ok(self.texture(&texture, tex_coord, transform, srgb))
     }
 
-    /// The size an image's header declares, refused above `MAX_TEXELS` before anything is
+    /// The size an image's header declares, refused above the texel limit before anything is
     /// decoded: a few hundred kilobytes of PNG can declare 20000 x 20000 texels, gigabytes
     /// once decoded. Headers that cannot be read are left to the decoder to report.
     fn check_image_size(&self, image: &gltf::Image) -> Result<(), String> {
@@ -942,11 +1040,12 @@ impl Loader<'_> {
         let Ok((width, height)) = reader.into_dimensions() else {
             return Ok(());
         };
-        if u64::from(width) * u64::from(height) > MAX_TEXELS {
-            return Err(format!(
-                "declares {width} x {height} texels, over the limit of {MAX_TEXELS} ({} MiB \
-                 decoded; 8192 x 8192 is the largest texture in common use)",
-                MAX_TEXELS * 4 >> 20
+        let texels = u64::from(width) * u64::from(height);
+        if texels > self.limits.max_texels {
+            return Err(LoadLimits::refusal(
+                &format!("declares {width} x {height} texels"),
+                self.limits.max_texels,
+                "--max-texels",
             ));
         }
         Ok(())

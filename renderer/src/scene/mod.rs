@@ -8,6 +8,7 @@ mod draco;
 pub mod gltf;
 pub mod gltf_export;
 mod lighting;
+pub mod limits;
 mod traversal;
 pub mod triangle;
 
