@@ -616,3 +616,99 @@ fn camera_from_renders_the_view_an_image_recorded() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A disk that fills up while the image is written (the file size limit of `ulimit -f`, whose
+/// signal is ignored, so writes fail as on a full disk): exit 1 naming the file and the cause,
+/// the old image untouched, no temporary file left.
+#[test]
+fn a_full_disk_fails_the_save_and_keeps_the_old_image() {
+    let dir = temp_dir("full-disk");
+    let out = dir.join("box.exr");
+    render_ok(
+        "assets/cornell-box.gltf",
+        &out,
+        "--spp 1 --width 16 --height 16",
+    );
+    let old = std::fs::read(&out).unwrap();
+    let line = format!(
+        "ulimit -f 4; trap '' XFSZ; exec {} render assets/cornell-box.gltf -o {} --spp 1 \
+         --width 256 --height 256",
+        env!("CARGO_BIN_EXE_caustica"),
+        out.display()
+    );
+    let o = Command::new("bash")
+        .args(["-c", &line])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("cannot write the image") && e.contains(&out.display().to_string()),
+        "{e}"
+    );
+    assert!(e.contains("File too large"), "{e}");
+    assert_eq!(std::fs::read(&out).unwrap(), old);
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Renders killed at moments spread over the run, saving included: each leaves the image that
+/// was there before or the whole new one, never part of one.
+#[test]
+fn a_save_killed_at_any_moment_leaves_the_old_image_or_the_new() {
+    let dir = temp_dir("killed");
+    let (out, new) = (dir.join("image.exr"), dir.join("new.exr"));
+    let flags = "--spp 2 --width 640 --height 640 --seed 3 --threads 1";
+    render_ok(
+        "assets/cornell-box.gltf",
+        &out,
+        "--spp 1 --width 64 --height 64",
+    );
+    let start = std::time::Instant::now();
+    render_ok("assets/cornell-box.gltf", &new, flags);
+    let whole = start.elapsed();
+    let (old_pixels, new_pixels) = (
+        read_exr(&out).unwrap().0.pixels,
+        read_exr(&new).unwrap().0.pixels,
+    );
+    let mut replaced = 0;
+    for i in 1..=16 {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_caustica"))
+            .args(
+                format!(
+                    "render assets/cornell-box.gltf -o {} {flags}",
+                    out.display()
+                )
+                .split(' '),
+            )
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        // From a little before the render's end (the save comes last) to a little after.
+        std::thread::sleep(whole.mul_f64(0.7 + 0.4 * i as f64 / 16.0));
+        let _ = child.kill();
+        child.wait().unwrap();
+        let pixels = read_exr(&out)
+            .unwrap_or_else(|e| panic!("kill {i}: {e}"))
+            .0
+            .pixels;
+        if pixels == new_pixels {
+            replaced += 1;
+        } else {
+            assert_eq!(
+                pixels, old_pixels,
+                "kill {i}: neither the old image nor the new"
+            );
+        }
+        // The next kill starts from the old image again.
+        render_ok(
+            "assets/cornell-box.gltf",
+            &out,
+            "--spp 1 --width 64 --height 64",
+        );
+    }
+    eprintln!("{replaced} of 16 killed renders had saved the new image");
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -62,41 +62,60 @@ impl Image {
     }
 }
 
-/// Writes to a temporary file beside `path`, then renames it over `path`, so a reader never
-/// sees a half-written image and a failed write leaves any old file intact.
-fn write_atomically(
+/// Saves `path` by way of a temporary file beside it, written by `encode`, flushed to the disk
+/// and only then renamed over `path` (a rename within a directory is atomic): a save that
+/// fails or is interrupted at any point (a full disk, a crash, a power cut) leaves the old
+/// file or the new one, never part of one. The error names `path`; no temporary file stays.
+pub fn save_atomically(
     path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), String>,
+    encode: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> Result<(), String>,
 ) -> Result<(), ImageError> {
+    use std::io::Write;
     let name = path
         .file_name()
         .ok_or_else(|| io_error(path, "not a file name"))?
         .to_string_lossy()
         .into_owned();
     let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    if let Err(e) = write(&tmp) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io_error(path, e));
-    }
-    std::fs::rename(&tmp, path).map_err(|e| {
+    let written = std::fs::File::create(&tmp)
+        .map_err(|e| e.to_string())
+        .and_then(|file| {
+            let mut out = std::io::BufWriter::new(file);
+            encode(&mut out)?;
+            // Flushed here, not on drop, where an error (the disk filling up) would be lost.
+            out.flush().map_err(|e| e.to_string())?;
+            out.get_ref().sync_all().map_err(|e| e.to_string())
+        })
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+    written.map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         io_error(path, e)
     })
 }
 
-/// EXR: float32 RGB, ZIP compression, `metadata` as text attributes named `caustica:KEY`.
+/// EXR: float32 RGB, ZIP compression, `metadata` as text attributes named `caustica:KEY`,
+/// saved atomically.
 pub fn write_exr(
     path: &Path,
     image: &Image,
     metadata: &BTreeMap<String, String>,
 ) -> Result<(), ImageError> {
-    use exr::prelude::*;
     if image.count_non_finite() > 0 {
         return Err(ImageError::Invalid(format!(
             "{} pixels are NaN or infinite",
             image.count_non_finite()
         )));
     }
+    save_atomically(path, |out| encode_exr(out, image, metadata))
+}
+
+/// `write_exr`'s encoding, to any writer.
+pub fn encode_exr(
+    out: impl std::io::Write + std::io::Seek,
+    image: &Image,
+    metadata: &BTreeMap<String, String>,
+) -> Result<(), String> {
+    use exr::prelude::*;
     let (w, h) = (image.width, image.height);
     let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
         let p = image.pixels[pos.y() * w + pos.x()];
@@ -117,12 +136,10 @@ pub fn write_exr(
         line_order: LineOrder::Increasing,
     };
     let layer = Layer::new((w, h), attributes, encoding, channels);
-    write_atomically(path, |tmp| {
-        Image::from_layer(layer)
-            .write()
-            .to_file(tmp)
-            .map_err(|e| e.to_string())
-    })
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(out)
+        .map_err(|e| e.to_string())
 }
 
 /// The most pixels an EXR read here may have (16384 x 8192, an equirectangular 16K
@@ -254,9 +271,9 @@ pub fn write_png_tone_mapped(
     let bytes = display_rgb8(image, exposure, curve);
     let buffer = ::image::RgbImage::from_raw(image.width as u32, image.height as u32, bytes)
         .ok_or_else(|| ImageError::Invalid("image size does not match its pixels".into()))?;
-    write_atomically(path, |tmp| {
+    save_atomically(path, |out| {
         buffer
-            .save_with_format(tmp, ::image::ImageFormat::Png)
+            .write_to(out, ::image::ImageFormat::Png)
             .map_err(|e| e.to_string())
     })
 }
@@ -410,5 +427,94 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("/nonexistent-dir/x.exr"));
+    }
+
+    /// A writer that takes `left` bytes and then fails as a full disk does.
+    struct FullAfter<W> {
+        inner: W,
+        left: usize,
+    }
+
+    impl<W: std::io::Write> std::io::Write for FullAfter<W> {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            if self.left == 0 {
+                return Err(std::io::ErrorKind::StorageFull.into());
+            }
+            let n = buf.len().min(self.left);
+            self.left -= n;
+            self.inner.write(&buf[..n])
+        }
+
+        fn flush(&mut self) -> std::io::Result<()> {
+            self.inner.flush()
+        }
+    }
+
+    impl<W: std::io::Seek> std::io::Seek for FullAfter<W> {
+        fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+            self.inner.seek(pos)
+        }
+    }
+
+    /// A save that fails at any byte of the new file (a disk that fills up there) reports the
+    /// file and the cause, and leaves the old file whole and no temporary file beside it.
+    #[test]
+    fn a_save_failing_at_any_byte_leaves_the_old_file() {
+        let dir = std::env::temp_dir().join(format!("caustica-save-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("snapshot.exr");
+        let mut old = Image::new(16, 8);
+        old.pixels.fill(Vec3::new(0.25, 0.5, 1.0));
+        let metadata = BTreeMap::from([("passes".to_string(), "1".to_string())]);
+        write_exr(&path, &old, &metadata).unwrap();
+        let mut new = Image::new(16, 8);
+        for (i, p) in new.pixels.iter_mut().enumerate() {
+            *p = Vec3::splat(i as f32 / 7.0);
+        }
+        let mut encoded = std::io::Cursor::new(Vec::new());
+        encode_exr(&mut encoded, &new, &metadata).unwrap();
+        let length = encoded.get_ref().len();
+        let offsets: Vec<usize> = (0..length)
+            .step_by(length / 50)
+            .chain([length - 1])
+            .collect();
+        for &k in &offsets {
+            let e = save_atomically(&path, |out| {
+                encode_exr(
+                    FullAfter {
+                        inner: out,
+                        left: k,
+                    },
+                    &new,
+                    &metadata,
+                )
+            })
+            .unwrap_err()
+            .to_string();
+            assert!(e.contains("snapshot.exr"), "{e}");
+            assert!(e.contains("storage full") || e.contains("space"), "{e}");
+            assert_eq!(
+                read_exr(&path).unwrap().0.pixels,
+                old.pixels,
+                "failed at {k}"
+            );
+            assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "failed at {k}");
+        }
+        let e = save_atomically(&dir.join("view.png"), |out| {
+            let png = FullAfter {
+                inner: out,
+                left: 40,
+            };
+            let bytes = display_rgb8(&new, 0.0, ToneCurve::Linear);
+            ::image::RgbImage::from_raw(16, 8, bytes)
+                .unwrap()
+                .write_to(&mut { png }, ::image::ImageFormat::Png)
+                .map_err(|e| e.to_string())
+        });
+        assert!(e.is_err());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        write_exr(&path, &new, &metadata).unwrap();
+        assert_eq!(read_exr(&path).unwrap().0.pixels, new.pixels);
+        std::fs::remove_dir_all(dir).unwrap();
     }
 }
