@@ -61,6 +61,10 @@ struct Cli {
     animate: bool,
     #[command(flatten)]
     limits: scene_flags::LimitFlags,
+    /// Memory the integrator's buffers may take, in bytes or with a suffix K, M, G (binary)
+    /// [default: what the system has available].
+    #[arg(long, value_name = "BYTES", value_parser = render::parse_bytes)]
+    max_memory: Option<u64>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -134,6 +138,7 @@ fn main() -> ExitCode {
                 launched: Some(launched),
                 automation,
                 limits: cli.limits.limits(),
+                memory_limit: cli.max_memory,
             };
             match viewer::run(options) {
                 Ok(()) => ExitCode::SUCCESS,

@@ -72,6 +72,7 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
         scene_flags: args.scene_flags.clone(),
         camera_from: None,
         panic_in_pass: None,
+        max_memory: None,
     };
     crate::render::run(&render)
 }

@@ -61,6 +61,10 @@ pub struct RenderArgs {
     /// pixels' luminance shown at 90 % of white (README, "Exposure").
     #[arg(long, default_value = "auto", value_parser = parse_exposure, allow_negative_numbers = true)]
     pub exposure: Exposure,
+    /// Memory the integrator's buffers may take, in bytes or with a suffix K, M, G
+    /// (binary) [default: what the system has available].
+    #[arg(long, value_name = "BYTES", value_parser = parse_bytes)]
+    pub max_memory: Option<u64>,
     /// Fault injection for the tests: a worker thread panics during this pass.
     #[arg(long, hide = true, value_name = "PASS")]
     pub panic_in_pass: Option<u64>,
@@ -88,6 +92,21 @@ fn parse_exposure(s: &str) -> Result<Exposure, String> {
 /// The registered integrators' names, as the values an `--integrator` flag accepts.
 pub fn integrator_names() -> clap::builder::PossibleValuesParser {
     clap::builder::PossibleValuesParser::new(integrators::registry().iter().map(|i| i.name))
+}
+
+/// A number of bytes, plain or with a binary suffix: 512M, 8G.
+pub fn parse_bytes(s: &str) -> Result<u64, String> {
+    let (digits, shift) = match s.char_indices().last() {
+        Some((i, 'K' | 'k')) => (&s[..i], 10),
+        Some((i, 'M' | 'm')) => (&s[..i], 20),
+        Some((i, 'G' | 'g')) => (&s[..i], 30),
+        _ => (s, 0),
+    };
+    digits
+        .parse::<u64>()
+        .ok()
+        .and_then(|n| n.checked_mul(1 << shift))
+        .ok_or_else(|| format!("'{s}' is not a number of bytes (like 512M or 8G)"))
 }
 
 pub fn parse_seconds(s: &str) -> Result<f64, String> {
@@ -231,6 +250,7 @@ pub fn run(args: &RenderArgs) -> Result<(), Failure> {
         target_rel_mse: args.until_error,
         camera,
         panic_in_pass: args.panic_in_pass,
+        memory_limit: args.max_memory,
         ..SessionConfig::new(scene.clone(), info.name, width, height)
     })
     .map_err(|e| match e {

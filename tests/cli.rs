@@ -164,6 +164,24 @@ fn runtime_errors_exit_1_naming_the_file() {
         "{e}"
     );
     assert!(!out.exists(), "nothing is written on failure");
+
+    // An image whose buffers would not fit is refused before anything is allocated (an
+    // argument too large for this machine: exit 2).
+    let o = render(
+        "assets/cornell-box.gltf",
+        &out,
+        "--integrator sppm --width 4096 --height 4096 --max-memory 1G",
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "sppm at 4096 x 4096 needs about 11.0 GiB for its buffers, more \
+             than the 1.0 GiB allowed"
+        ),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists(), "nothing is written on failure");
     std::fs::remove_dir_all(dir).unwrap();
 }
 

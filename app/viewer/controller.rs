@@ -103,6 +103,8 @@ pub struct RenderController {
     failure_reported: bool,
     /// Fault injection for the tests: the sessions started panic during this pass.
     pub panic_in_pass: Option<u64>,
+    /// Memory a session's buffers may take (None: what the system has available).
+    pub memory_limit: Option<u64>,
 }
 
 fn drop_in_background(session: Session) {
@@ -122,6 +124,7 @@ impl RenderController {
             limits: LoadLimits::default(),
             failure_reported: false,
             panic_in_pass: None,
+            memory_limit: None,
         }
     }
 
@@ -266,6 +269,7 @@ impl RenderController {
             background: true,
             camera: self.camera,
             panic_in_pass: self.panic_in_pass,
+            memory_limit: self.memory_limit,
             ..SessionConfig::new(scene, &settings.integrator, settings.width, settings.height)
         })
         .map_err(|e| e.to_string())?;

@@ -43,6 +43,8 @@ pub struct ViewerOptions {
     pub automation: Option<Automation>,
     /// What a scene file may ask for.
     pub limits: LoadLimits,
+    /// Memory a session's buffers may take (None: what the system has available).
+    pub memory_limit: Option<u64>,
 }
 
 /// The viewer: its settings and view on the UI thread, the render and the loads in the
@@ -123,6 +125,7 @@ impl ViewerApp {
             started: options.launched.unwrap_or_else(Instant::now),
         };
         app.controller.limits = options.limits;
+        app.controller.memory_limit = options.memory_limit;
         if let Some(name) = options.integrator {
             app.apply(Command::SetIntegrator(name.clone()));
             if app.settings.integrator != name {

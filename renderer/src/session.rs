@@ -52,6 +52,8 @@ pub struct SessionConfig {
     /// Fault injection, for the tests of what a failure leaves: a worker thread panics during
     /// this pass (counted from 0).
     pub panic_in_pass: Option<u64>,
+    /// Bytes the integrator's buffers may take; None: the memory the system has available.
+    pub memory_limit: Option<u64>,
 }
 
 pub type FrameCallback = Arc<dyn Fn() + Send + Sync>;
@@ -76,6 +78,7 @@ impl SessionConfig {
             on_frame: None,
             camera: None,
             panic_in_pass: None,
+            memory_limit: None,
         }
     }
 }
@@ -148,6 +151,33 @@ pub enum SessionError {
     InvalidResolution(u32, u32),
     #[error("cannot start worker threads: {0}")]
     Threads(String),
+    #[error(
+        "{integrator} at {width} x {height} needs about {} for its buffers, more than the {} \
+         {limit_is}: render a smaller image (--max-memory raises the limit)",
+        gib(*needed),
+        gib(*limit)
+    )]
+    TooLarge {
+        integrator: &'static str,
+        width: u32,
+        height: u32,
+        needed: u64,
+        limit: u64,
+        limit_is: &'static str,
+    },
+}
+
+fn gib(bytes: u64) -> String {
+    format!("{:.1} GiB", bytes as f64 / f64::from(1 << 30))
+}
+
+/// The memory the system can give without swapping (`MemAvailable` in /proc/meminfo), if
+/// it says.
+pub fn available_memory() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = meminfo.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }
 
 struct Shared {
@@ -183,6 +213,25 @@ impl Session {
         let (w, h) = (config.width, config.height);
         if !(1..=MAX_RESOLUTION).contains(&w) || !(1..=MAX_RESOLUTION).contains(&h) {
             return Err(SessionError::InvalidResolution(w, h));
+        }
+        // Checked before anything is allocated: at 16384 x 16384 photon mapping's buffers
+        // alone would take 180 GB, and an allocation that fails aborts the process.
+        let limit = match config.memory_limit {
+            Some(limit) => Some((limit, "allowed")),
+            None => available_memory().map(|m| (m, "available")),
+        };
+        let needed = info.memory_bytes(w, h);
+        if let Some((limit, limit_is)) = limit
+            && needed > limit
+        {
+            return Err(SessionError::TooLarge {
+                integrator: info.name,
+                width: w,
+                height: h,
+                needed,
+                limit,
+                limit_is,
+            });
         }
         let threads = if config.threads == 0 {
             std::thread::available_parallelism().map_or(1, |n| n.get())

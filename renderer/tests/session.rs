@@ -270,6 +270,27 @@ fn every_integrator_reports_the_memory_of_its_buffers() {
         .unwrap()
         .wait();
         let bytes = frame.integrator_memory_bytes;
+        // The estimate a session checks before it starts bounds what the buffers take, and
+        // is not far above it (a factor 2 per pixel).
+        assert!(
+            bytes as u64 <= info.memory_bytes(64, 64),
+            "{}: {bytes}",
+            info.name
+        );
+        let large = Session::start(SessionConfig {
+            integrator: info.name.into(),
+            ..SessionConfig::new(config(None).scene, info.name, 256, 256)
+        })
+        .unwrap();
+        wait_for(&large, |f| f.passes >= 1);
+        let per_pixel = large.frame().integrator_memory_bytes as f64 / (256.0 * 256.0);
+        assert!(
+            (info.bytes_per_pixel as f64) >= per_pixel
+                && (info.bytes_per_pixel as f64) < 2.0 * per_pixel,
+            "{}: {per_pixel} bytes a pixel, {} declared",
+            info.name,
+            info.bytes_per_pixel
+        );
         match info.name {
             "pt" | "bdpt" => assert_eq!(bytes, film + pass_buffer, "{}", info.name),
             _ => assert!(
@@ -315,4 +336,29 @@ fn a_panicking_pass_fails_the_session_and_keeps_the_passes_before() {
             "{integrator}"
         );
     }
+}
+
+/// A session whose buffers would take more memory than there is (or than it is allowed) is
+/// refused before anything is allocated, saying how much it needs and what to do.
+#[test]
+fn a_session_too_large_for_the_memory_is_refused_before_it_starts() {
+    let refused = Session::start(SessionConfig {
+        integrator: "sppm".into(),
+        memory_limit: Some(1 << 30),
+        ..SessionConfig::new(config(None).scene, "sppm", 4096, 4096)
+    });
+    let Err(e @ SessionError::TooLarge { .. }) = refused else {
+        panic!("a 4096 x 4096 sppm session started within 1 GiB");
+    };
+    assert_eq!(
+        e.to_string(),
+        "sppm at 4096 x 4096 needs about 11.0 GiB for its buffers, more than the 1.0 GiB \
+         allowed: render a smaller image (--max-memory raises the limit)"
+    );
+    // Within the limit it starts.
+    Session::start(SessionConfig {
+        memory_limit: Some(1 << 30),
+        ..SessionConfig::new(config(None).scene, "sppm", 256, 256)
+    })
+    .unwrap();
 }

@@ -9,6 +9,20 @@ pub struct IntegratorInfo {
     pub description: &'static str,
     pub params: &'static [ParamSpec],
     pub create: fn(RenderContext, &ParamValues) -> Box<dyn Integrator>,
+    /// Bytes of its buffers per pixel once it runs (`Integrator::memory_bytes` over the
+    /// pixels, measured; a session checks it against the memory there is before it starts).
+    pub bytes_per_pixel: u64,
+}
+
+/// Bytes an integrator's buffers take whatever the image size (MMLT's chains and bootstrap
+/// are the most, about 1.5 MiB), beside `IntegratorInfo::bytes_per_pixel`.
+pub const FIXED_BYTES: u64 = 16 << 20;
+
+impl IntegratorInfo {
+    /// The memory its buffers take at `width` x `height`, an upper bound.
+    pub fn memory_bytes(&self, width: u32, height: u32) -> u64 {
+        self.bytes_per_pixel * u64::from(width) * u64::from(height) + FIXED_BYTES
+    }
 }
 
 static REGISTRY: &[IntegratorInfo] = &[
@@ -18,6 +32,7 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Unidirectional path tracing with next-event estimation and MIS (reference).",
         params: path_tracer::PathSettings::PARAMS,
         create: path_tracer::create,
+        bytes_per_pixel: 84,
     },
     IntegratorInfo {
         name: "bdpt",
@@ -25,6 +40,7 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Veach 1997: camera and light subpaths joined by every strategy, balance-heuristic MIS.",
         params: bdpt::BdptSettings::PARAMS,
         create: bdpt::create,
+        bytes_per_pixel: 84,
     },
     IntegratorInfo {
         name: "mmlt",
@@ -32,6 +48,7 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Hachisuka et al. 2014: Metropolis chains over primary samples and bidirectional techniques.",
         params: mmlt::MmltSettings::PARAMS,
         create: mmlt::create,
+        bytes_per_pixel: 400,
     },
     IntegratorInfo {
         name: "ppm",
@@ -39,6 +56,7 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Hachisuka et al. 2008: hit points from one eye pass, radii shrinking per hit point.",
         params: ppm::PhotonMappingSettings::PARAMS,
         create: ppm::create_ppm,
+        bytes_per_pixel: 700,
     },
     IntegratorInfo {
         name: "sppm",
@@ -46,6 +64,7 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Hachisuka & Jensen 2009: hit points re-traced every pass, statistics per pixel.",
         params: ppm::PhotonMappingSettings::PARAMS,
         create: ppm::create_sppm,
+        bytes_per_pixel: 700,
     },
     IntegratorInfo {
         name: "pppm",
@@ -53,6 +72,7 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Knaus & Zwicker 2011: one global radius per pass, independent passes averaged.",
         params: ppm::PhotonMappingSettings::PARAMS,
         create: ppm::create_pppm,
+        bytes_per_pixel: 700,
     },
 ];
 
