@@ -1,6 +1,7 @@
 //! What the viewer remembers between runs (eframe storage): the render and display settings
 //! and the recent scenes.
 
+use caustica_renderer::exposure::EXPOSURE_RANGE;
 use caustica_renderer::image::ToneCurve;
 use caustica_renderer::integrators::{self, ParamValues};
 use caustica_renderer::session::MAX_RESOLUTION;
@@ -9,6 +10,8 @@ use std::path::PathBuf;
 
 pub const STORAGE_KEY: &str = "caustica-viewer";
 const MAX_RECENT: usize = 10;
+/// The most worker threads the viewer starts (a stored value beyond it is someone else's).
+pub const MAX_THREADS: usize = 1024;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -90,9 +93,13 @@ impl ViewerSettings {
             .unwrap_or_else(|_| Self::defaults_of(&self.integrator));
         self.width = self.width.clamp(1, MAX_RESOLUTION);
         self.height = self.height.clamp(1, MAX_RESOLUTION);
-        if !self.exposure.is_finite() {
-            self.exposure = 0.0;
-        }
+        self.threads = self.threads.min(MAX_THREADS);
+        self.recent_scenes.truncate(MAX_RECENT);
+        self.exposure = if self.exposure.is_finite() {
+            self.exposure.clamp(-EXPOSURE_RANGE, EXPOSURE_RANGE)
+        } else {
+            0.0
+        };
         if !(self.environment_strength.is_finite() && self.environment_strength >= 0.0) {
             self.environment_strength = 1.0;
         }
@@ -115,6 +122,7 @@ impl ViewerSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::json;
 
     #[test]
     fn settings_survive_a_round_trip_and_bad_stores_are_repaired() {
@@ -149,6 +157,85 @@ mod tests {
         assert_eq!(
             (fixed.environment_strength, fixed.environment_rotation),
             (1.0, 0.0)
+        );
+    }
+
+    /// What a sanitized store always satisfies, whatever the file said.
+    fn assert_usable(s: &ViewerSettings, what: &str) {
+        let info = integrators::find(&s.integrator).unwrap_or_else(|| panic!("{what}"));
+        integrators::resolve_params(info, &s.params).unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert!((1..=MAX_RESOLUTION).contains(&s.width), "{what}");
+        assert!((1..=MAX_RESOLUTION).contains(&s.height), "{what}");
+        assert!(s.threads <= MAX_THREADS, "{what}");
+        assert!(s.recent_scenes.len() <= MAX_RECENT, "{what}");
+        assert!(s.exposure.abs() <= EXPOSURE_RANGE, "{what}");
+        assert!(s.environment_strength.is_finite() && s.environment_strength >= 0.0);
+        assert!(s.environment_rotation.is_finite(), "{what}");
+        assert!(!s.environment.is_empty(), "{what}");
+    }
+
+    /// A structured mutation loop over the settings file (the stable stand-in for fuzzing a
+    /// serde struct): every field, and a parameter, set to each of a set of hostile values
+    /// (wrong types, negative, zero, huge, an enormous list, an unknown name). Each store
+    /// either fails to parse (the viewer then starts from the defaults) or is sanitized into
+    /// settings the viewer can start a session with.
+    #[test]
+    fn hostile_settings_files_are_refused_or_repaired() {
+        let long_list: Vec<String> = (0..10_000).map(|i| format!("scene-{i}.gltf")).collect();
+        let hostile = [
+            json!(null),
+            json!(-1),
+            json!(0),
+            json!(1),
+            json!(1e300),
+            json!(-1e300),
+            json!(u64::MAX),
+            json!(i64::MIN),
+            json!(0.5),
+            json!("sppm"),
+            json!("no-such-thing"),
+            json!(""),
+            json!(true),
+            json!([]),
+            json!({}),
+            json!(long_list),
+            json!(["a.gltf", "{\"position\": [1e30, 0, 0]}"]),
+        ];
+        let base = serde_json::to_value(ViewerSettings::default()).unwrap();
+        let fields: Vec<String> = base.as_object().unwrap().keys().cloned().collect();
+        let (mut parsed, mut refused) = (0, 0);
+        for field in &fields {
+            for value in &hostile {
+                let mut v = base.clone();
+                v[field.as_str()] = value.clone();
+                let what = format!("{field} = {value:.40}");
+                match serde_json::from_value::<ViewerSettings>(v) {
+                    Ok(s) => {
+                        assert_usable(&s.sanitized(), &what);
+                        parsed += 1;
+                    }
+                    Err(_) => refused += 1,
+                }
+            }
+        }
+        for integrator in integrators::registry() {
+            for spec in integrator.params {
+                for value in [-1e300, -1.0, 0.0, 1e300, f64::NAN, f64::INFINITY] {
+                    let mut s = ViewerSettings {
+                        integrator: integrator.name.into(),
+                        params: ViewerSettings::defaults_of(integrator.name),
+                        ..Default::default()
+                    };
+                    s.params.insert(spec.name.into(), value);
+                    s.params.insert("no_such_parameter".into(), 1.0);
+                    assert_usable(&s.sanitized(), &format!("{}: {value}", spec.name));
+                    parsed += 1;
+                }
+            }
+        }
+        assert!(
+            parsed > 100 && refused > 100,
+            "{parsed} parsed, {refused} refused"
         );
     }
 }
