@@ -215,6 +215,16 @@ fn parse(bytes: &[u8]) -> Result<(gltf::json::Root, Option<Vec<u8>>), SceneError
     let invalid = |e: &dyn std::fmt::Display| err(format!("not a valid glTF file: {e}"));
     // The JSON is read where it lies (a .gltf with embedded buffers can be tens of MB).
     let (json, blob) = if bytes.starts_with(b"glTF") {
+        // The gltf crate subtracts the header's size from the length the header declares
+        // before it compares (an overflow, found by fuzzing).
+        let declared = bytes
+            .get(8..12)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        if declared.is_none_or(|length| length < 12) {
+            return Err(invalid(&format!(
+                "the GLB header declares a length of {declared:?} bytes, less than the header's 12"
+            )));
+        }
         let glb = gltf::Glb::from_slice(bytes).map_err(|e| invalid(&e))?;
         (glb.json, glb.bin.map(|b| b.into_owned()))
     } else {
@@ -246,6 +256,24 @@ fn validated(root: gltf::json::Root) -> Result<gltf::Document, SceneError> {
         if draco {
             compressed.extend(primitive.attributes.values().map(|a| a.value()));
             compressed.extend(primitive.indices.as_ref().map(|a| a.value()));
+        }
+    }
+    // The gltf crate's validator indexes a primitive's POSITION accessor before it checks the
+    // index (a panic, found by fuzzing): attribute indices are checked first.
+    let accessors = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(index) = primitive
+                .attributes
+                .values()
+                .find(|a| a.value() >= accessors)
+            {
+                return Err(err(format!(
+                    "invalid glTF: meshes[{m}].primitives[{p}].attributes: accessor {} does not \
+                     exist ({accessors} accessors)",
+                    index.value()
+                )));
+            }
         }
     }
     let mut problems = Vec::new();
@@ -352,18 +380,22 @@ fn check_views_and_accessors(
         if let Some(sparse) = acc.sparse() {
             check_sparse(&acc, &sparse, buffers)?;
         }
+        // The gltf crate's reader counts from count - 1 (an overflow at 0, found by fuzzing);
+        // the spec's minimum is 1.
+        if acc.count() == 0 {
+            return Err(err(format!(
+                "accessor {}: count 0 (glTF requires at least 1)",
+                acc.index()
+            )));
+        }
         let Some(view) = acc.view() else { continue };
         let elem = acc.size();
         let stride = view.stride().unwrap_or(elem);
         let count = acc.count();
-        let needed = if count == 0 {
-            Some(0)
-        } else {
-            stride
-                .checked_mul(count - 1)
-                .and_then(|s| s.checked_add(elem))
-                .and_then(|s| s.checked_add(acc.offset()))
-        };
+        let needed = stride
+            .checked_mul(count - 1)
+            .and_then(|s| s.checked_add(elem))
+            .and_then(|s| s.checked_add(acc.offset()));
         if needed.is_none_or(|n| n > view.length()) || stride < elem {
             return Err(err(format!(
                 "accessor {}: {count} elements of {elem} bytes do not fit buffer view {} ({} bytes)",
@@ -429,6 +461,57 @@ fn check_sparse(
             )));
         }
         previous = Some(index);
+    }
+    Ok(())
+}
+
+/// The accessor types glTF 2.0 allows each vertex attribute, the indices and the morph
+/// targets (3.7.2.1), as far as the gltf crate's readers rely on them: they read an element
+/// of the type the semantic implies and panic on a component type it does not expect (found
+/// by fuzzing).
+fn check_accessor_types(prim: &gltf::Primitive) -> Result<(), String> {
+    use gltf::Semantic;
+    use gltf::accessor::{DataType, Dimensions};
+    let small = |t| matches!(t, DataType::U8 | DataType::U16 | DataType::F32);
+    let allowed = |semantic: &Semantic, d: Dimensions, t: DataType| match semantic {
+        Semantic::Positions | Semantic::Normals => d == Dimensions::Vec3 && t == DataType::F32,
+        Semantic::Tangents => d == Dimensions::Vec4 && t == DataType::F32,
+        Semantic::TexCoords(_) => d == Dimensions::Vec2 && small(t),
+        Semantic::Colors(_) => matches!(d, Dimensions::Vec3 | Dimensions::Vec4) && small(t),
+        Semantic::Joints(_) => d == Dimensions::Vec4 && matches!(t, DataType::U8 | DataType::U16),
+        Semantic::Weights(_) => d == Dimensions::Vec4 && small(t),
+        // Application-specific attributes (_NAME) are not read.
+        _ => true,
+    };
+    let refuse = |what: String, acc: &gltf::Accessor| {
+        Err(format!(
+            "{what}: accessor {} holds {:?} of {:?}, which glTF does not allow there",
+            acc.index(),
+            acc.dimensions(),
+            acc.data_type()
+        ))
+    };
+    for (semantic, acc) in prim.attributes() {
+        if !allowed(&semantic, acc.dimensions(), acc.data_type()) {
+            return refuse(format!("attribute {semantic:?}"), &acc);
+        }
+    }
+    if let Some(acc) = prim.indices()
+        && (acc.dimensions() != Dimensions::Scalar
+            || !matches!(
+                acc.data_type(),
+                DataType::U8 | DataType::U16 | DataType::U32
+            ))
+    {
+        return refuse("indices".into(), &acc);
+    }
+    for (t, target) in prim.morph_targets().enumerate() {
+        let displacements = [target.positions(), target.normals(), target.tangents()];
+        for acc in displacements.into_iter().flatten() {
+            if acc.dimensions() != Dimensions::Vec3 || acc.data_type() != DataType::F32 {
+                return refuse(format!("morph target {t}"), &acc);
+            }
+        }
     }
     Ok(())
 }
@@ -737,6 +820,7 @@ impl Loader<'_> {
         want_uvs1: bool,
         name: &str,
     ) -> Result<VertexData, SceneError> {
+        check_accessor_types(prim).map_err(|e| err(format!("{name}: {e}")))?;
         let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
         let Some(positions) = reader.read_positions() else {
             return Err(err(format!("{name}: primitive without POSITION")));
