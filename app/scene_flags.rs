@@ -4,7 +4,8 @@
 use anyhow::anyhow;
 use caustica_renderer::light::environment::EnvironmentSettings;
 use caustica_renderer::scene::limits::{
-    DEFAULT_MAX_BUFFER_BYTES, DEFAULT_MAX_TEXELS, DEFAULT_MAX_TRIANGLES, LoadLimits,
+    DEFAULT_MAX_BUFFER_BYTES, DEFAULT_MAX_NODE_DEPTH, DEFAULT_MAX_TEXELS, DEFAULT_MAX_TRIANGLES,
+    LoadLimits, MAX_NODE_DEPTH,
 };
 use caustica_renderer::scene::{Scene, gltf};
 use clap::Args;
@@ -45,6 +46,10 @@ pub struct LimitFlags {
     /// Triangles in the scene, each instance of a mesh counted.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_TRIANGLES)]
     pub max_triangles: u64,
+    /// Levels of the node hierarchy.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_NODE_DEPTH,
+          value_parser = clap::value_parser!(u64).range(1..=MAX_NODE_DEPTH))]
+    pub max_node_depth: u64,
 }
 
 impl Default for LimitFlags {
@@ -59,6 +64,7 @@ impl From<LoadLimits> for LimitFlags {
             max_texels: l.max_texels,
             max_buffer_bytes: l.max_buffer_bytes,
             max_triangles: l.max_triangles,
+            max_node_depth: l.max_node_depth,
         }
     }
 }
@@ -69,6 +75,7 @@ impl LimitFlags {
             max_texels: self.max_texels,
             max_buffer_bytes: self.max_buffer_bytes,
             max_triangles: self.max_triangles,
+            max_node_depth: self.max_node_depth,
         }
     }
 }

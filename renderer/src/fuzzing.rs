@@ -16,6 +16,7 @@ pub const FUZZ_LIMITS: LoadLimits = LoadLimits {
     max_texels: 1 << 20,
     max_buffer_bytes: 1 << 24,
     max_triangles: 1 << 16,
+    max_node_depth: 64,
 };
 
 /// Reads `bytes` as a .gltf or .glb file (external files resolved in a folder that does not

@@ -1456,5 +1456,35 @@ fn files_over_a_load_limit_are_refused_naming_the_limit_and_its_flag() {
         "{e}"
     );
     load_description_with(&path, &defaults).unwrap();
+
+    // Node depth: the box's meshes under a chain of 20 nodes.
+    let mut v = to_gltf(&cornell_box(false));
+    let mut nodes = v["nodes"].as_array().unwrap().clone();
+    let roots = v["scenes"][0]["nodes"].clone();
+    let first = nodes.len();
+    for level in 0..20 {
+        let children = if level == 19 {
+            roots.clone()
+        } else {
+            json!([first + level + 1])
+        };
+        nodes.push(json!({ "children": children }));
+    }
+    v["nodes"] = Value::Array(nodes);
+    v["scenes"][0]["nodes"] = json!([first]);
+    let path = write_json(&dir, "deep.gltf", &v);
+    let limits = LoadLimits {
+        max_node_depth: 10,
+        ..defaults
+    };
+    let e = refusal(&path, limits);
+    assert!(
+        e.contains(
+            "the node hierarchy is deeper, over the limit of 10 (raise it with \
+             --max-node-depth)"
+        ),
+        "{e}"
+    );
+    load_description_with(&path, &defaults).unwrap();
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -38,8 +38,6 @@ const READ_FROM_JSON: &[&str] = &[
     "KHR_draco_mesh_compression",
 ];
 
-const MAX_NODE_DEPTH: usize = 256;
-
 /// Loads and builds a scene from a glTF file, lit from outside as the default rule says.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     load_with(path, EnvironmentSettings::default(), &LoadLimits::default())
@@ -569,9 +567,11 @@ fn rigid(m: Mat4) -> Affine3A {
 
 impl Loader<'_> {
     fn visit(&mut self, node: &gltf::Node, parent: Mat4, depth: usize) -> Result<(), SceneError> {
-        if depth > MAX_NODE_DEPTH {
-            return Err(err(format!(
-                "the node hierarchy is deeper than {MAX_NODE_DEPTH} (a cycle?)"
+        if depth as u64 > self.limits.max_node_depth {
+            return Err(err(LoadLimits::refusal(
+                &format!("node {}: the node hierarchy is deeper", node.index()),
+                self.limits.max_node_depth,
+                "--max-node-depth",
             )));
         }
         match self.visited[node.index()] {

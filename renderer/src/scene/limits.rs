@@ -13,6 +13,8 @@ pub struct LoadLimits {
     pub max_buffer_bytes: u64,
     /// Triangles in the scene, each instance of a mesh counted.
     pub max_triangles: u64,
+    /// Levels of the node hierarchy (walked recursively: at most `MAX_NODE_DEPTH`).
+    pub max_node_depth: u64,
 }
 
 /// 8192 x 8192, the largest texture in common use (256 MiB as RGBA8).
@@ -23,12 +25,18 @@ pub const DEFAULT_MAX_BUFFER_BYTES: u64 = 4 << 30;
 /// memory a scene takes).
 pub const DEFAULT_MAX_TRIANGLES: u64 = 50_000_000;
 
+/// 256 levels: deeper than any modelling tool nests.
+pub const DEFAULT_MAX_NODE_DEPTH: u64 = 256;
+/// The deepest walk the loader's stack allows (a loading thread has 2 MiB).
+pub const MAX_NODE_DEPTH: u64 = 1024;
+
 impl Default for LoadLimits {
     fn default() -> Self {
         LoadLimits {
             max_texels: DEFAULT_MAX_TEXELS,
             max_buffer_bytes: DEFAULT_MAX_BUFFER_BYTES,
             max_triangles: DEFAULT_MAX_TRIANGLES,
+            max_node_depth: DEFAULT_MAX_NODE_DEPTH,
         }
     }
 }
