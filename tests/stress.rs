@@ -6,6 +6,7 @@
 use caustica::viewer::controller::RenderController;
 use caustica::viewer::settings::ViewerSettings;
 use caustica_renderer::integrators::registry;
+use caustica_renderer::process::{resident_bytes, thread_count};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -13,29 +14,14 @@ use std::time::{Duration, Instant};
 const CHANGES: usize = 1000;
 const WARM_UP: usize = 100;
 
-fn threads() -> usize {
-    std::fs::read_dir("/proc/self/task").unwrap().count()
-}
-
-fn resident_bytes() -> u64 {
-    let status = std::fs::read_to_string("/proc/self/status").unwrap();
-    let line = status.lines().find(|l| l.starts_with("VmRSS:")).unwrap();
-    line.split_whitespace()
-        .nth(1)
-        .unwrap()
-        .parse::<u64>()
-        .unwrap()
-        * 1024
-}
-
 /// Waits (up to 30 s) for the threads to fall back to `count`: dropped sessions wind down,
 /// and loads and surveys finish, on threads of their own.
 fn settle_threads(count: usize) -> usize {
     let start = Instant::now();
-    while threads() > count && start.elapsed() < Duration::from_secs(30) {
+    while thread_count().unwrap() > count && start.elapsed() < Duration::from_secs(30) {
         std::thread::sleep(Duration::from_millis(20));
     }
-    threads()
+    thread_count().unwrap()
 }
 
 fn asset(name: &str) -> PathBuf {
@@ -59,7 +45,7 @@ fn loaded(c: &mut RenderController, settings: &ViewerSettings) {
 
 /// (changes a second, resident after the warm-up, resident at the end, threads before, after)
 fn churn() -> (f64, u64, u64, usize, usize) {
-    let threads_before = threads();
+    let threads_before = thread_count().unwrap();
     let mut settings = ViewerSettings {
         width: 64,
         height: 48,
@@ -76,7 +62,7 @@ fn churn() -> (f64, u64, u64, usize, usize) {
     for i in 0..CHANGES {
         if i == WARM_UP {
             loaded(&mut c, &settings);
-            resident_after_warm_up = resident_bytes();
+            resident_after_warm_up = resident_bytes().unwrap();
         }
         match i % 10 {
             // Another integrator, with its defaults.
@@ -116,7 +102,7 @@ fn churn() -> (f64, u64, u64, usize, usize) {
     }
     loaded(&mut c, &settings);
     let per_second = CHANGES as f64 / start.elapsed().as_secs_f64();
-    let resident_at_end = resident_bytes();
+    let resident_at_end = resident_bytes().unwrap();
     drop(c);
     (
         per_second,

@@ -3,7 +3,6 @@
 //! are applied. State and its changes live in `state.rs`.
 
 use crate::viewer::ViewerApp;
-use crate::viewer::automation::resident_bytes;
 use crate::viewer::command::Command;
 use crate::viewer::controller::ControllerEvent;
 use crate::viewer::navigation::Orbit;
@@ -12,6 +11,7 @@ use crate::viewer::plots;
 use crate::viewer::settings::STORAGE_KEY;
 use caustica_renderer::exposure::auto_exposure;
 use caustica_renderer::metadata::camera_from_json;
+use caustica_renderer::process::resident_bytes;
 use caustica_renderer::session::Frame;
 use eframe::egui::{self, Color32, Key, KeyboardShortcut, Modifiers, RichText};
 use std::path::PathBuf;

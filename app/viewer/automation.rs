@@ -217,10 +217,3 @@ impl CpuTicks {
         used / (cores * elapsed.as_secs_f64()).max(1e-9)
     }
 }
-
-/// Resident memory of this process (Linux), for the statistics panel.
-pub fn resident_bytes() -> Option<u64> {
-    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
-    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
-    Some(pages * 4096)
-}

@@ -34,6 +34,7 @@ pub mod material;
 pub mod metadata;
 pub mod preview;
 pub mod procedural;
+pub mod process;
 pub mod sampling;
 pub mod scene;
 pub mod session;

@@ -171,15 +171,6 @@ fn gib(bytes: u64) -> String {
     format!("{:.1} GiB", bytes as f64 / f64::from(1 << 30))
 }
 
-/// The memory the system can give without swapping (`MemAvailable` in /proc/meminfo), if
-/// it says.
-pub fn available_memory() -> Option<u64> {
-    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = meminfo.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
 struct Shared {
     frame: ArcSwap<Frame>,
     cancel: AtomicBool,
@@ -218,7 +209,7 @@ impl Session {
         // alone would take 180 GB, and an allocation that fails aborts the process.
         let limit = match config.memory_limit {
             Some(limit) => Some((limit, "allowed")),
-            None => available_memory().map(|m| (m, "available")),
+            None => crate::process::available_memory().map(|m| (m, "available")),
         };
         let needed = info.memory_bytes(w, h);
         if let Some((limit, limit_is)) = limit

@@ -4,6 +4,7 @@
 
 use caustica_renderer::integrators::registry;
 use caustica_renderer::procedural::cornell_box;
+use caustica_renderer::process::{resident_bytes, thread_count};
 use caustica_renderer::scene::{Scene, gltf};
 use caustica_renderer::session::{Session, SessionConfig};
 use std::path::Path;
@@ -13,25 +14,14 @@ use std::time::{Duration, Instant};
 const RESTARTS: usize = 2000;
 const WARM_UP: usize = 200;
 
-fn threads() -> usize {
-    std::fs::read_dir("/proc/self/task").unwrap().count()
-}
-
-fn resident_bytes() -> u64 {
-    let status = std::fs::read_to_string("/proc/self/status").unwrap();
-    let line = status.lines().find(|l| l.starts_with("VmRSS:")).unwrap();
-    let kib: u64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
-    kib * 1024
-}
-
 /// Waits (up to 10 s) for the process's threads to fall back to `count`: a dropped session's
 /// worker pool winds down after the drop returns.
 fn settle_threads(count: usize) -> usize {
     let start = Instant::now();
-    while threads() > count && start.elapsed() < Duration::from_secs(10) {
+    while thread_count().unwrap() > count && start.elapsed() < Duration::from_secs(10) {
         std::thread::sleep(Duration::from_millis(10));
     }
-    threads()
+    thread_count().unwrap()
 }
 
 /// A small xorshift generator: the sequence of actions is the same every run.
@@ -65,7 +55,7 @@ struct Figures {
 fn churn() -> Figures {
     let asset = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/cornell-box.gltf");
     let built = Arc::new(Scene::build(cornell_box(true)).unwrap());
-    let threads_before = threads();
+    let threads_before = thread_count().unwrap();
     let mut rng = Choices(0x9e37_79b9_7f4a_7c15);
     let mut kept: Option<Session> = None;
     let mut scene = built.clone();
@@ -75,7 +65,7 @@ fn churn() -> Figures {
         if i == WARM_UP {
             drop(kept.take());
             settle_threads(threads_before);
-            resident_after_warm_up = resident_bytes();
+            resident_after_warm_up = resident_bytes().unwrap();
         }
         // A scene load every 20 restarts, from the file or built anew.
         if i % 20 == 0 {
@@ -140,7 +130,7 @@ fn churn() -> Figures {
     Figures {
         restarts_per_second,
         resident_after_warm_up,
-        resident_at_end: resident_bytes(),
+        resident_at_end: resident_bytes().unwrap(),
         threads_before,
         threads_after,
     }
