@@ -938,3 +938,27 @@ fn a_panicking_pass_is_reported_and_the_render_restarts() {
     });
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// An image size whose buffers would not fit in memory is refused with a message saying what
+/// it needs, and the render the user had goes on.
+#[test]
+fn a_size_too_large_for_the_memory_is_refused_and_the_render_goes_on() {
+    let mut h = harness(Some(asset("cornell-box.gltf")));
+    h.state_mut().controller.memory_limit = Some(8 << 30);
+    h.state_mut().apply(Command::SetIntegrator("sppm".into()));
+    step_until(&mut h, "the first frames", rendering);
+    h.state_mut().apply(Command::SetResolution(16384, 16384));
+    step_until(&mut h, "the refusal", |a| {
+        a.messages.last().is_some_and(|m| m.is_error)
+    });
+    let text = h.state().messages.last().unwrap().text.clone();
+    assert!(
+        text.contains("sppm at 16384 x 16384 needs about 175.0 GiB for its buffers, more than the 8.0 GiB allowed"),
+        "{text}"
+    );
+    keeps_rendering(&mut h, "the render the user had");
+    let frame = h.state().controller.frame().unwrap();
+    assert_eq!((frame.image.width, frame.image.height), (96, 72));
+    let settings = &h.state().settings;
+    assert_eq!((settings.width, settings.height), (96, 72));
+}

@@ -262,9 +262,14 @@ impl ViewerApp {
                 }
             }
             Command::SetResolution(w, h) => {
+                let before = (self.settings.width, self.settings.height);
                 self.settings.width = w.clamp(1, MAX_RESOLUTION);
                 self.settings.height = h.clamp(1, MAX_RESOLUTION);
-                self.restart();
+                // A size refused (too large for the memory) leaves the one that renders.
+                if let Err(e) = self.controller.restart(&self.settings) {
+                    (self.settings.width, self.settings.height) = before;
+                    self.error(e);
+                }
             }
             Command::SetThreads(t) => {
                 self.settings.threads = t;
