@@ -127,13 +127,15 @@ impl Texture {
         if self.texels.is_empty() || !uv.is_finite() {
             return Vec4::ONE;
         }
+        // Texel coordinates kept where i64 and its + 1 stay exact (a file's texture transform
+        // can scale by 1e30, found by fuzzing); f32 has no fraction left long before.
+        let limit = 1e15;
+        let x = (uv.x * self.width as f32).clamp(-limit, limit);
+        let y = (uv.y * self.height as f32).clamp(-limit, limit);
         if self.nearest {
-            let x = (uv.x * self.width as f32).floor() as i64;
-            let y = (uv.y * self.height as f32).floor() as i64;
-            return self.texel(x, y);
+            return self.texel(x.floor() as i64, y.floor() as i64);
         }
-        let x = uv.x * self.width as f32 - 0.5;
-        let y = uv.y * self.height as f32 - 0.5;
+        let (x, y) = (x - 0.5, y - 0.5);
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (x0, y0) = (x0 as i64, y0 as i64);
@@ -170,6 +172,10 @@ mod tests {
             Wrap::ClampToEdge,
             Wrap::ClampToEdge,
         );
+        // Coordinates far outside the image wrap without overflowing.
+        for far in [1e30, -1e30, f32::MAX] {
+            assert!(t.lookup(Vec2::splat(far)).is_finite());
+        }
         let mid = t.lookup(Vec2::new(0.5, 0.5));
         assert!((mid.x - 0.5).abs() < 1e-6);
         assert!((t.lookup(Vec2::new(0.25, 0.5)).x).abs() < 1e-6);
