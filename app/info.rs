@@ -1,7 +1,7 @@
 //! `caustica info`: what a scene holds, what light transport it has, which estimators can
 //! render it and which one to use, with the command line that does.
 
-use caustica_renderer::transport;
+use caustica_renderer::advisor;
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -20,7 +20,7 @@ pub fn run(args: &InfoArgs) -> Result<(), crate::render::Failure> {
     let scene = args.scene_flags.load(&args.scene)?;
     let (width, height) = args.size.resolve(scene.camera.aspect);
     let started = Instant::now();
-    let (s, r) = transport::analyse(&scene, width, height);
+    let (s, r) = advisor::analyse(&scene, width, height);
     let i = &scene.info;
     println!("{}", args.scene.display());
     println!(

@@ -4,7 +4,6 @@
 //! Exit codes: 0 success, 1 runtime error (unreadable or invalid scene, unwritable output,
 //! no window), 2 bad arguments. Each error is one line naming the file or argument.
 
-mod chart;
 mod converge;
 mod info;
 mod merge;

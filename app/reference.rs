@@ -5,7 +5,7 @@
 //! into the header (`caustica:estimated_relmse`), so a user knows how far it can be trusted.
 
 use crate::param_flags::ParamFlags;
-use caustica_renderer::transport;
+use caustica_renderer::survey;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -48,7 +48,7 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
     }
     let scene = args.scene_flags.load(&args.scene)?;
     let (width, height) = args.size.resolve(scene.camera.aspect);
-    let survey = transport::survey_at(&scene, width, height);
+    let survey = survey::survey_at(&scene, width, height);
     let r = survey.reference(width, height, &scene.camera);
     eprintln!("reference with {}: {}", r.integrator, r.reasons.join("; "));
     let render = RenderArgs {

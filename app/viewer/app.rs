@@ -4,13 +4,10 @@
 
 use crate::viewer::ViewerApp;
 use crate::viewer::command::Command;
-use crate::viewer::controller::ControllerEvent;
-use crate::viewer::navigation::Orbit;
 use crate::viewer::panels::{self, PanelStatus};
 use crate::viewer::plots;
 use crate::viewer::settings::STORAGE_KEY;
 use caustica_renderer::exposure::auto_exposure;
-use caustica_renderer::metadata::camera_from_json;
 use caustica_renderer::process::resident_bytes;
 use caustica_renderer::session::Frame;
 use eframe::egui::{self, Color32, Key, KeyboardShortcut, Modifiers, RichText};
@@ -79,57 +76,14 @@ impl ViewerApp {
         });
     }
 
-    /// The view saved for `path`, if any, replaces the scene's camera.
-    fn restore_view(&mut self, path: &std::path::Path) {
-        self.view = None;
-        let saved = self.settings.view.clone();
-        let Some((_, json)) = saved.filter(|(p, _)| p == path) else {
-            return;
-        };
-        let (Ok(camera), Some(loaded)) = (camera_from_json(&json), &self.controller.scene) else {
-            return;
-        };
-        self.view = Some(Orbit::from_camera(&camera, &loaded.scene.bounds));
-        self.controller.camera = self.view.map(|v| v.camera());
-        if let Err(e) = self.controller.restart(&self.settings) {
-            self.error(e);
-        }
-    }
-
     /// Background results, dropped files and keyboard shortcuts.
     fn handle_input_and_events(&mut self, ctx: &egui::Context) {
-        for event in self.controller.poll(&self.settings) {
-            match event {
-                ControllerEvent::SceneLoaded(path) => {
-                    self.timings
-                        .scene_loaded
-                        .get_or_insert(self.started.elapsed());
-                    self.viewport.fit();
-                    self.expose_next_frame = self.settings.auto_exposure;
-                    self.restore_view(&path);
-                    self.info(format!("opened {}", path.display()));
-                    self.settings.remember_scene(path);
-                }
-                ControllerEvent::SceneRelit => {
-                    if let Some(loaded) = &self.controller.scene {
-                        let text = format!("environment: {}", loaded.scene.info.lighting);
-                        self.info(text);
-                    }
-                }
-                ControllerEvent::SceneFailed(e) => {
-                    // A failed relight leaves the scene lit as it was: say so in the panel too.
-                    if let Some(loaded) = &self.controller.scene {
-                        self.settings.environment = loaded.lit_by.choice.clone();
-                        self.settings.environment_strength = loaded.lit_by.strength;
-                        self.settings.environment_rotation = loaded.lit_by.rotation;
-                    }
-                    self.error(e)
-                }
-                ControllerEvent::RenderFailed(e) => self.error(format!(
-                    "{e}. The image so far is kept (Ctrl+S saves it); R restarts"
-                )),
-            }
-        }
+        let mut commands: Vec<Command> = self
+            .controller
+            .poll(&self.settings)
+            .into_iter()
+            .map(Command::from)
+            .collect();
         self.poll_saves();
         let dropped: Vec<PathBuf> = ctx.input(|i| {
             i.raw
@@ -140,7 +94,7 @@ impl ViewerApp {
                 .collect()
         });
         if let Some(path) = dropped.into_iter().next() {
-            self.apply(Command::OpenScene(path));
+            commands.push(Command::OpenScene(path));
         }
         let shortcuts = [
             (
@@ -154,7 +108,7 @@ impl ViewerApp {
         ];
         for (shortcut, command) in shortcuts {
             if ctx.input_mut(|i| i.consume_shortcut(&shortcut)) {
-                self.apply(command);
+                commands.push(command);
             }
         }
         if !ctx.egui_wants_keyboard_input() {
@@ -175,9 +129,12 @@ impl ViewerApp {
             ];
             for (key, command) in keys {
                 if ctx.input(|i| i.key_pressed(key) && i.modifiers.is_none()) {
-                    self.apply(command);
+                    commands.push(command);
                 }
             }
+        }
+        for command in commands {
+            self.apply(command);
         }
     }
 }
@@ -186,8 +143,8 @@ impl ViewerApp {
     /// Follows the newest frame: a new session clears the plots and the heat map; the frame
     /// feeds the convergence plot (true error against the reference, estimated error).
     fn track_frame(&mut self, ctx: &egui::Context, current: Option<&Frame>) {
-        if self.controller.sessions_started != self.sessions_seen {
-            self.sessions_seen = self.controller.sessions_started;
+        if self.controller.sessions_started() != self.sessions_seen {
+            self.sessions_seen = self.controller.sessions_started();
             self.convergence.reset();
             self.error_map.clear();
         }
@@ -196,8 +153,7 @@ impl ViewerApp {
             && f.passes > 0
         {
             if self.expose_next_frame {
-                self.expose_next_frame = false;
-                self.settings.exposure = auto_exposure(&f.image);
+                self.apply(Command::ExposeFrame(auto_exposure(&f.image)));
             }
             self.convergence.offer(&f.image, f.elapsed.as_secs_f64());
             if let Some(e) = f.error.as_ref() {
@@ -235,7 +191,7 @@ impl ViewerApp {
     }
 
     fn settings_panel(&self, ui: &mut egui::Ui, current: Option<&Frame>) -> Vec<Command> {
-        let scene = self.controller.scene.as_ref();
+        let scene = self.controller.scene();
         let status = PanelStatus {
             scene: scene.map(|s| (s.path.as_path(), &s.scene.info)),
             recommendation: scene.and_then(|s| s.recommendation()),

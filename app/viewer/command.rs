@@ -1,10 +1,13 @@
-//! What the user can ask of the viewer (`Command`, returned by the panels and the keyboard
-//! and carried out by `ViewerApp::apply`), and what the viewer tells the user (`Message`).
+//! What the user can ask of the viewer, and what its background work reports (`Command`,
+//! returned by the panels, the keyboard and the controller's events, and carried out by
+//! `ViewerApp::apply`, the one place the viewer's state changes), and what the viewer tells
+//! the user (`Message`).
 
+use crate::viewer::controller::ControllerEvent;
 use caustica_renderer::image::ToneCurve;
 use std::path::PathBuf;
 
-/// Everything the user can ask for.
+/// Everything the user can ask for, and what the background work reports.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Command {
     OpenScene(PathBuf),
@@ -50,6 +53,28 @@ pub enum Command {
     /// Look through the file's camera of this index, or (None) the default view that frames
     /// the scene.
     ChooseCamera(Option<usize>),
+    /// A scene opened (from this file) has loaded and renders.
+    SceneLoaded(PathBuf),
+    /// The scene was rebuilt with another environment.
+    SceneRelit,
+    /// Loading or relighting failed (the message names the file and the problem); the scene
+    /// shown stays as it was.
+    SceneFailed(String),
+    /// The session's render failed (a pass panicked): why. Its image stays.
+    RenderFailed(String),
+    /// A scene's first frame measured for automatic exposure: show it at these stops.
+    ExposeFrame(f32),
+}
+
+impl From<ControllerEvent> for Command {
+    fn from(event: ControllerEvent) -> Self {
+        match event {
+            ControllerEvent::SceneLoaded(path) => Command::SceneLoaded(path),
+            ControllerEvent::SceneRelit => Command::SceneRelit,
+            ControllerEvent::SceneFailed(e) => Command::SceneFailed(e),
+            ControllerEvent::RenderFailed(e) => Command::RenderFailed(e),
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]

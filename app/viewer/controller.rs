@@ -5,13 +5,14 @@
 //! helper thread.
 
 use crate::viewer::settings::ViewerSettings;
+use caustica_renderer::advisor::{self, Recommendation};
 use caustica_renderer::camera::CameraDesc;
 use caustica_renderer::integrators;
 use caustica_renderer::light::environment::EnvironmentSettings;
 use caustica_renderer::scene::limits::LoadLimits;
 use caustica_renderer::scene::{Scene, SceneError, gltf};
 use caustica_renderer::session::{Frame, FrameCallback, Session, SessionConfig};
-use caustica_renderer::transport::{self, Recommendation, TransportSurvey};
+use caustica_renderer::survey::TransportSurvey;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
@@ -87,24 +88,26 @@ pub enum ParamEffect {
     Restarted,
 }
 
+/// The scene and the render session behind the viewer, driven by `ViewerApp::apply`; its
+/// state is read through its methods and changed only by them.
 pub struct RenderController {
-    pub scene: Option<LoadedScene>,
+    scene: Option<LoadedScene>,
     session: Option<Session>,
     loading: Option<Loading>,
     on_frame: FrameCallback,
     /// Sessions started so far, so tests and the status line can tell a restart happened.
-    pub sessions_started: u64,
+    sessions_started: u64,
     /// The view the user moved to, in place of the scene's camera; a newly opened scene
     /// starts without one.
-    pub camera: Option<CameraDesc>,
+    camera: Option<CameraDesc>,
     /// What a scene file may ask for (the command line can raise each limit).
-    pub limits: LoadLimits,
+    limits: LoadLimits,
     /// The current session's failure has been reported.
     failure_reported: bool,
     /// Fault injection for the tests: the sessions started panic during this pass.
-    pub panic_in_pass: Option<u64>,
+    panic_in_pass: Option<u64>,
     /// Memory a session's buffers may take (None: what the system has available).
-    pub memory_limit: Option<u64>,
+    memory_limit: Option<u64>,
 }
 
 fn drop_in_background(session: Session) {
@@ -126,6 +129,42 @@ impl RenderController {
             panic_in_pass: None,
             memory_limit: None,
         }
+    }
+
+    /// The scene shown, once one has loaded.
+    pub fn scene(&self) -> Option<&LoadedScene> {
+        self.scene.as_ref()
+    }
+
+    /// Sessions started so far, so tests and the status line can tell a restart happened.
+    pub fn sessions_started(&self) -> u64 {
+        self.sessions_started
+    }
+
+    /// The view the user moved to, if any, in place of the scene's camera.
+    pub fn camera(&self) -> Option<CameraDesc> {
+        self.camera
+    }
+
+    /// Sets the view the next session renders (None: the scene's camera); returns the last.
+    pub fn set_camera(&mut self, camera: Option<CameraDesc>) -> Option<CameraDesc> {
+        std::mem::replace(&mut self.camera, camera)
+    }
+
+    /// What scene files opened from now on may ask for.
+    pub fn set_limits(&mut self, limits: LoadLimits) {
+        self.limits = limits;
+    }
+
+    /// The memory the buffers of sessions started from now on may take (None: what the
+    /// system has available).
+    pub fn set_memory_limit(&mut self, limit: Option<u64>) {
+        self.memory_limit = limit;
+    }
+
+    /// Fault injection for the tests: sessions started from now on panic during this pass.
+    pub fn set_panic_in_pass(&mut self, pass: Option<u64>) {
+        self.panic_in_pass = pass;
     }
 
     /// Starts loading a scene, lit as `settings` say, and surveying its light transport for
@@ -178,7 +217,7 @@ impl RenderController {
             let (survey_tx, survey_rx) = channel();
             let _ = tx.send(Ok((scene.clone(), survey_rx)));
             notify();
-            let _ = survey_tx.send(transport::analyse(&scene, width, height));
+            let _ = survey_tx.send(advisor::analyse(&scene, width, height));
             notify();
         });
         self.loading = Some(Loading {

@@ -3,13 +3,13 @@
 
 use crate::viewer::command::Command;
 use crate::viewer::settings::ViewerSettings;
+use caustica_renderer::advisor::Recommendation;
 use caustica_renderer::camera::CameraDesc;
 use caustica_renderer::image::ToneCurve;
 use caustica_renderer::integrators::{self, ParamSpec};
 use caustica_renderer::light::environment::EnvironmentChoice;
 use caustica_renderer::scene::SceneInfo;
 use caustica_renderer::session::{Frame, MAX_RESOLUTION, RunState};
-use caustica_renderer::transport::Recommendation;
 use eframe::egui::{self, RichText};
 use std::path::Path;
 

@@ -12,8 +12,7 @@ impl ViewerApp {
     pub fn snapshot_path(&self, extension: &str) -> PathBuf {
         let scene = self
             .controller
-            .scene
-            .as_ref()
+            .scene()
             .and_then(|s| s.path.file_stem())
             .map_or("render".to_string(), |s| s.to_string_lossy().into_owned());
         let time = humantime::format_rfc3339_seconds(std::time::SystemTime::now())
@@ -35,8 +34,7 @@ impl ViewerApp {
         let (exposure, curve) = (self.settings.exposure, self.settings.tone_curve);
         let scene = self
             .controller
-            .scene
-            .as_ref()
+            .scene()
             .map(|s| s.path.clone())
             .unwrap_or_default();
         let Some(session) = self.controller.session() else {

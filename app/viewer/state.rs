@@ -16,7 +16,7 @@ use crate::viewer::viewport::{HoveredPixel, Viewport};
 use caustica_renderer::camera::CameraDesc;
 use caustica_renderer::exposure::EXPOSURE_RANGE;
 use caustica_renderer::integrators;
-use caustica_renderer::metadata::camera_to_json;
+use caustica_renderer::metadata::{camera_from_json, camera_to_json};
 use caustica_renderer::scene::limits::LoadLimits;
 use caustica_renderer::session::{MAX_RESOLUTION, RunState};
 use eframe::egui;
@@ -24,6 +24,9 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::Instant;
+
+/// What a snapshot saved on a background thread reports: the file written, or why not.
+pub(super) type SaveOutcome = Result<PathBuf, String>;
 
 /// What the viewer was started with.
 #[derive(Clone, Debug, Default)]
@@ -63,10 +66,7 @@ pub struct ViewerApp {
     /// Show process readouts (memory, UI frame rate); snapshot tests turn them off because
     /// they change from run to run.
     pub show_process_stats: bool,
-    pub(super) saves: (
-        Sender<Result<PathBuf, String>>,
-        Receiver<Result<PathBuf, String>>,
-    ),
+    pub(super) saves: (Sender<SaveOutcome>, Receiver<SaveOutcome>),
     pub(super) open_dialog: Option<(DialogPurpose, egui_file::FileDialog)>,
     pub(super) sessions_seen: u64,
     pub(super) automation: Option<Automation>,
@@ -124,8 +124,8 @@ impl ViewerApp {
             screenshot_requested: false,
             started: options.launched.unwrap_or_else(Instant::now),
         };
-        app.controller.limits = options.limits;
-        app.controller.memory_limit = options.memory_limit;
+        app.controller.set_limits(options.limits);
+        app.controller.set_memory_limit(options.memory_limit);
         if let Some(name) = options.integrator {
             app.apply(Command::SetIntegrator(name.clone()));
             if app.settings.integrator != name {
@@ -185,7 +185,7 @@ impl ViewerApp {
             }
             Command::ShowEnvironmentDialog => self.show_dialog(DialogPurpose::Environment),
             Command::MoveCamera { orbit, pan, dolly } => {
-                let Some(loaded) = &self.controller.scene else {
+                let Some(loaded) = self.controller.scene() else {
                     return;
                 };
                 let scene = &loaded.scene;
@@ -195,12 +195,13 @@ impl ViewerApp {
                 view.rotate(orbit[0], orbit[1]);
                 view.pan(pan[0], pan[1]);
                 view.dolly(dolly);
-                self.controller.camera = Some(view.camera());
-                self.settings.view = Some((loaded.path.clone(), camera_to_json(&view.camera())));
+                let camera = view.camera();
+                self.settings.view = Some((loaded.path.clone(), camera_to_json(&camera)));
+                self.controller.set_camera(Some(camera));
                 self.restart();
             }
             Command::ChooseCamera(choice) => {
-                let Some(loaded) = &self.controller.scene else {
+                let Some(loaded) = self.controller.scene() else {
                     return;
                 };
                 let scene = &loaded.scene;
@@ -212,22 +213,21 @@ impl ViewerApp {
                     None => CameraDesc::framing(&scene.bounds),
                 };
                 self.view = Some(Orbit::from_camera(&camera, &scene.bounds));
-                self.controller.camera = Some(camera);
                 self.settings.view = Some((loaded.path.clone(), camera_to_json(&camera)));
+                self.controller.set_camera(Some(camera));
                 self.restart();
             }
             Command::ResetCamera => {
                 self.view = None;
                 self.settings.view = None;
-                if self.controller.camera.take().is_some() {
+                if self.controller.set_camera(None).is_some() {
                     self.restart();
                 }
             }
             Command::UseRecommended => {
                 let Some(r) = self
                     .controller
-                    .scene
-                    .as_ref()
+                    .scene()
                     .and_then(|s| s.recommendation().cloned())
                 else {
                     return;
@@ -316,6 +316,57 @@ impl ViewerApp {
                 self.settings.show_error_map = !self.settings.show_error_map;
                 self.error_map.clear();
             }
+            Command::SceneLoaded(path) => {
+                self.timings
+                    .scene_loaded
+                    .get_or_insert(self.started.elapsed());
+                self.viewport.fit();
+                self.expose_next_frame = self.settings.auto_exposure;
+                self.restore_view(&path);
+                self.info(format!("opened {}", path.display()));
+                self.settings.remember_scene(path);
+            }
+            Command::SceneRelit => {
+                if let Some(loaded) = self.controller.scene() {
+                    let text = format!("environment: {}", loaded.scene.info.lighting);
+                    self.info(text);
+                }
+            }
+            Command::SceneFailed(e) => {
+                // A failed relight leaves the scene lit as it was: say so in the panel too.
+                if let Some(loaded) = self.controller.scene() {
+                    self.settings.environment = loaded.lit_by.choice.clone();
+                    self.settings.environment_strength = loaded.lit_by.strength;
+                    self.settings.environment_rotation = loaded.lit_by.rotation;
+                }
+                self.error(e)
+            }
+            Command::RenderFailed(e) => self.error(format!(
+                "{e}. The image so far is kept (Ctrl+S saves it); R restarts"
+            )),
+            Command::ExposeFrame(exposure) => {
+                self.expose_next_frame = false;
+                if exposure.is_finite() {
+                    self.settings.exposure = exposure;
+                }
+            }
+        }
+    }
+
+    /// The view saved for `path`, if any, replaces the scene's camera.
+    fn restore_view(&mut self, path: &std::path::Path) {
+        self.view = None;
+        let saved = self.settings.view.clone();
+        let Some((_, json)) = saved.filter(|(p, _)| p == path) else {
+            return;
+        };
+        let (Ok(camera), Some(loaded)) = (camera_from_json(&json), self.controller.scene()) else {
+            return;
+        };
+        self.view = Some(Orbit::from_camera(&camera, &loaded.scene.bounds));
+        self.controller.set_camera(self.view.map(|v| v.camera()));
+        if let Err(e) = self.controller.restart(&self.settings) {
+            self.error(e);
         }
     }
 }

@@ -90,9 +90,7 @@ impl Viewport {
     ) -> Option<HoveredPixel> {
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
-        let Some(image) = image else {
-            return None;
-        };
+        let image = image?;
         let size = Vec2::new(image.width as f32, image.height as f32);
         let fit = (rect.width() / size.x)
             .min(rect.height() / size.y)

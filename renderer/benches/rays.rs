@@ -197,7 +197,7 @@ fn bench_load(c: &mut Criterion) {
     // first iteration), its meshes checked and flattened, the BVH built.
     let desc = caustica_renderer::procedural::caustic_pool_tessellated(707);
     let glb = std::env::temp_dir().join(format!("caustica-bench-{}-pool.glb", std::process::id()));
-    std::fs::write(&glb, caustica_renderer::scene::gltf_export::to_glb(&desc))
+    std::fs::write(&glb, caustica_renderer::scene::gltf::export::to_glb(&desc))
         .expect("the temporary directory is writable");
     group.bench_function(
         "load the 1 M triangle pool from a .glb and build its BVH",

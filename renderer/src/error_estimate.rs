@@ -75,7 +75,7 @@ impl ErrorEstimate {
         let n = pixels.len() as f64;
         let bias_rel_mse = bias_total.max(0.0) / n;
         let rel_mse = variance_total / n + bias_rel_mse;
-        rel_mse.is_finite().then(|| ErrorEstimate {
+        rel_mse.is_finite().then_some(ErrorEstimate {
             rel_mse,
             per_pixel,
             width,
@@ -380,7 +380,13 @@ mod tests {
         // so r is the lower mean, 0.8, where every x is 0.9).
         let sparse = |offset: usize| -> Vec<DVec3> {
             (0..9)
-                .map(|i| DVec3::splat(if (i + offset) % 2 == 0 { 1.8 } else { 0.0 }))
+                .map(|i| {
+                    DVec3::splat(if (i + offset).is_multiple_of(2) {
+                        1.8
+                    } else {
+                        0.0
+                    })
+                })
                 .collect()
         };
         let r = robust_reference_sq(&[sparse(0), sparse(1)], None, 3, 3);

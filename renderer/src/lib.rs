@@ -20,6 +20,7 @@
 //!   [`error_estimate`] estimates that error without a reference, from the integrator's own
 //!   samples, for every integrator and every frame.
 
+pub mod advisor;
 pub mod camera;
 pub mod color;
 pub mod error_estimate;
@@ -38,6 +39,6 @@ pub mod process;
 pub mod sampling;
 pub mod scene;
 pub mod session;
+pub mod survey;
 pub mod texture;
 pub mod texture_footprint;
-pub mod transport;

@@ -3,26 +3,9 @@
 //! session's own account of its run (`Session::run_description`).
 
 use crate::camera::{CameraDesc, Projection};
-use crate::integrators::{ParamValues, params_json};
-use crate::session::Frame;
+use crate::integrators::params_json;
+use crate::session::{Frame, RunDescription};
 use std::collections::BTreeMap;
-use std::path::PathBuf;
-
-/// The run an image came from: the integrator with its parameters as they stand (live
-/// changes included), the seed, the scene file and the worker threads actually used.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RunDescription {
-    pub integrator: String,
-    pub params: ParamValues,
-    pub seed: u64,
-    pub scene: PathBuf,
-    /// What lit the scene from outside (`SceneInfo::lighting`), with its strength and
-    /// rotation when it has them.
-    pub environment: String,
-    /// The view rendered.
-    pub camera: CameraDesc,
-    pub threads: usize,
-}
 
 /// Header attributes (written as `caustica:KEY`) of `frame`, rendered by `run`.
 ///

@@ -285,7 +285,7 @@ pub fn scaled(mut desc: SceneDescription, s: f32) -> SceneDescription {
 
 /// The scenes shipped in `assets/`, as (file name, glTF text).
 pub fn bundled_assets() -> Vec<(&'static str, String)> {
-    use crate::scene::gltf_export::to_gltf_string;
+    use crate::scene::gltf::export::to_gltf_string;
     vec![
         ("cornell-box.gltf", to_gltf_string(&cornell_box(false))),
         ("cornell-glass.gltf", to_gltf_string(&cornell_box(true))),

@@ -7,7 +7,7 @@ use caustica_renderer::scene::{Scene, SceneDescription};
 use caustica_renderer::session::{Session, SessionConfig};
 use std::sync::Arc;
 
-mod common;
+use crate::common;
 use common::{assert_strategies_agree, mean, render, with_orthographic_camera};
 
 /// Every strategy on its own (unweighted) converges to the same image for each path length
@@ -86,8 +86,8 @@ fn block_means(
             let this_pass = totals[b] - previous[b];
             sum[b] += this_pass;
             sum_sq[b] += this_pass * this_pass;
-            previous[b] = totals[b];
         }
+        previous.copy_from_slice(&totals);
     }
     let n = passes as f64;
     (0..nb)

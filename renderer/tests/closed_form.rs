@@ -6,7 +6,7 @@ use caustica_renderer::image::Image;
 use caustica_renderer::procedural::{emissive_sphere, sphere_with_point_light};
 use caustica_renderer::scene::SceneDescription;
 
-mod common;
+use crate::common;
 
 /// The path tracer's image, which must drop no sample.
 fn render(

@@ -6,7 +6,7 @@
 //! radius squared like n^(alpha - 1), the rate of the kernel bias where radiance is smooth.
 //! (The bias itself, measured directly on a scene with curvature, is in photon_mapping.rs.)
 
-mod common;
+use crate::common;
 
 use caustica_renderer::camera::Camera;
 use caustica_renderer::integrators::{self, ParamValues, RenderContext};
@@ -59,7 +59,7 @@ fn rel_mse_at(
 #[test]
 fn unbiased_estimators_converge_like_one_over_n() {
     let scene = Arc::new(Scene::build(sphere_with_point_light(64)).unwrap());
-    let runs: [(&str, &[(&str, f64)], &[u64], f64); 3] = [
+    let runs: [(&str, common::Params, &[u64], f64); 3] = [
         ("pt", &[], &[8, 16, 32, 64, 128, 256, 512], 0.0),
         ("bdpt", &[], &[8, 16, 32, 64, 128, 256], 0.0),
         (

@@ -13,7 +13,7 @@ use glam::{Mat3, Vec3};
 use std::f64::consts::PI;
 use std::sync::Arc;
 
-mod common;
+use crate::common;
 
 const WIDTH: usize = 128;
 const HEIGHT: usize = 64;
@@ -157,7 +157,7 @@ fn every_integrator_reproduces_the_irradiance_of_a_patch_environment() {
     let exact = ALBEDO as f64 / PI * irradiance(n_map);
     // The photon mappers' direct light is next-event estimation, as the path tracer's; their
     // photons from the environment are checked by the mirror test below.
-    let cases: [(&str, &[(&str, f64)], u64); 4] = [
+    let cases: [(&str, common::Params, u64); 4] = [
         ("pt", &[], 160),
         ("bdpt", &[], 160),
         ("mmlt", &[], 160),

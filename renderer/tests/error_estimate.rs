@@ -16,7 +16,7 @@
 //! A reference rendered for the test has its own error, which adds to the measured one; it is
 //! kept below a tenth of the smallest error it is compared with (the figures are printed).
 
-mod common;
+use crate::common;
 
 use caustica_renderer::camera::Camera;
 use caustica_renderer::image::{Image, compare, read_exr};
@@ -222,7 +222,7 @@ fn on_the_uniform_closed_form_every_estimate_tracks_the_true_error() {
         pixels: vec![glam::Vec3::ONE; 24 * 24],
     };
     let photons = [("radius", 0.1), ("photons", 10_000.0)];
-    let runs: [(&str, &[(&str, f64)], &[u64]); 6] = [
+    let runs: [(&str, common::Params, &[u64]); 6] = [
         ("pt", &[], &[2, 8, 32, 128, 512]),
         ("bdpt", &[], &[2, 8, 32, 128]),
         ("mmlt", &[("bootstrap", 10_000.0)], &[4, 16, 64, 256]),

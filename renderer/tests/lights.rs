@@ -12,7 +12,7 @@ use caustica_renderer::texture::{Texture, Wrap};
 use glam::{Vec2, Vec3};
 use std::f64::consts::PI;
 
-mod common;
+use crate::common;
 use common::render;
 
 const EYE: Vec3 = Vec3::new(0.0, 1.5, 3.0);

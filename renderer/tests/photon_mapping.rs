@@ -6,7 +6,7 @@ use caustica_renderer::procedural::{emissive_sphere, sphere_with_point_light};
 use caustica_renderer::scene::{Scene, SceneDescription};
 use std::sync::Arc;
 
-mod common;
+use crate::common;
 use common::{MirroredLight, log_log_slope, mean};
 
 /// `common::render` with this file's seed.
@@ -79,7 +79,7 @@ fn extreme_parameters_keep_the_image_finite_and_sensible() {
             // Direct light alone gives 0.5; photons add up to the exact 1 (a huge radius blurs
             // but on a uniform scene keeps the mean).
             assert!(
-                m >= 0.45 && m < 1.6,
+                (0.45..1.6).contains(&m),
                 "{integrator} {name} = {value}: mean {m}"
             );
         }
@@ -360,7 +360,7 @@ fn the_grid_is_rebuilt_only_when_hit_points_or_radii_require_it() {
             assert_eq!(builds, 40, "{variant:?}");
         } else {
             assert!(
-                builds >= 1 && builds <= 10,
+                (1..=10).contains(&builds),
                 "{variant:?}: {builds} builds in 40 passes"
             );
         }

@@ -138,7 +138,6 @@ fn the_scene_is_shared_safely_between_threads() {
     let handles: Vec<_> = (0..4)
         .map(|_| {
             let scene = scene.clone();
-            let trace = trace;
             std::thread::spawn(move || trace(&scene))
         })
         .collect();

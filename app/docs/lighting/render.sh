@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Renders the images README shows under "Default lighting": the bundled material spheres
+# Renders the images app/docs/lighting/README.md shows (README shows one, under "Default lighting"): the bundled material spheres
 # (a model without light sources) as the old default lit them, by a uniform environment of
 # radiance 1, and as the default rule lights them now, by the studio; and the studio turned
 # half way round. PNG, automatic exposure, 512 x 256, 256 samples per pixel of the path tracer.

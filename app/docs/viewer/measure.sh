@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Measures the viewer as a user runs it, under Xvfb with software rendering (lavapipe), and
-# writes app/docs/viewer/figures.md and the table in README.md between its markers. Per
+# writes app/docs/viewer/figures.md (README links it). Per
 # integrator on the Cornell box with a glass sphere, at 640 x 480 and 1280 x 720, in a
 # 1280 x 800 window with the plots shown and fresh settings:
 #   - the time from the scene's load to its first image (and from launch), and from launch
@@ -81,9 +81,3 @@ done
   echo
   echo "$table"
 } > app/docs/viewer/figures.md
-# README.md holds the same table between its markers.
-awk -v file=app/docs/viewer/figures.md '
-  /<!-- viewer-figures:start -->/ { print; while ((getline line < file) > 0) print line; skip = 1; next }
-  /<!-- viewer-figures:end -->/ { skip = 0 }
-  !skip { print }
-' README.md > "$work/README.md" && cp "$work/README.md" README.md

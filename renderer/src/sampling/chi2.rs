@@ -89,7 +89,7 @@ pub fn test_directions(
     significance: f64,
 ) -> Result<(), String> {
     let mut observed = vec![0.0; THETA_RES * PHI_RES];
-    let mut sampler = Sampler::new(0xC415_0u64 + name.len() as u64);
+    let mut sampler = Sampler::new(0x000C_4150_u64 + name.len() as u64);
     for k in 0..SAMPLES {
         sampler.start_pixel_sample(k as u64, 0);
         let u = sampler.get_2d();

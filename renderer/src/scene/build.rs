@@ -130,7 +130,7 @@ fn is_degenerate(p: &[Vec3; 3]) -> bool {
 /// Checks one mesh's arrays: whole triangles, finite positions, one normal and one texture
 /// coordinate per position when present.
 fn validate_mesh(mesh: &MeshDesc) -> Result<(), SceneError> {
-    if mesh.indices.len() % 3 != 0 {
+    if !mesh.indices.len().is_multiple_of(3) {
         return Err(SceneError::new(format!(
             "mesh '{}': index count {} is not a multiple of 3",
             mesh.name,

@@ -4,9 +4,7 @@
 
 pub mod accel;
 mod build;
-mod draco;
 pub mod gltf;
-pub mod gltf_export;
 mod lighting;
 pub mod limits;
 mod traversal;

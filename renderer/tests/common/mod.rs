@@ -1,5 +1,5 @@
 //! What several test files share: scenes with closed-form radiance and the helpers that
-//! compute it. (Each test file compiles this module on its own; not every file uses all of it.)
+//! compute it. (Not every test module uses all of it.)
 #![allow(dead_code)]
 
 use caustica_renderer::image::Image;
@@ -11,6 +11,9 @@ use std::sync::Arc;
 /// Renders `passes` passes of `integrator` with `params` (over its defaults) at `size` x
 /// `size` on `threads` worker threads (0: one per core), and returns the image (checked free
 /// of NaN and Inf) and the count of samples dropped at their source.
+/// An integrator's parameters, as the tables of runs name them.
+pub type Params<'a> = &'a [(&'a str, f64)];
+
 pub fn render(
     desc: SceneDescription,
     integrator: &str,

@@ -7,12 +7,9 @@
 //! Light that reaches the camera in fewer than `FIRST_CHAIN_LENGTH` bounces (emitters seen
 //! directly, direct illumination) is not left to the chains: each pass also renders it by path
 //! tracing to that depth, one stratified sample per pixel (Mitsuba's MLT integrators do the
-//! same, their `directSamples`). The chains' target is proportional to brightness, so they
-//! spent their steps where the image is brightest, not where it is hard: on the Cornell box
-//! with glass, half of b was emitters seen directly (k = 0) and a fifth direct light (k = 1),
-//! which one camera ray and one shadow ray per pixel estimate with next to no noise, so
-//! seven chain steps in ten went where they gained nothing. The two parts estimate disjoint
-//! sets of paths, so the image is their sum and its variance the sum of theirs.
+//! same, their `directSamples`), because the chains' target is brightness, not difficulty.
+//! The two parts estimate disjoint sets of paths, so the image is their sum and its variance
+//! the sum of theirs.
 //!
 //! A pass is width x height steps shared equally among the chains; chains run in parallel
 //! and their splats are merged in chain order. Before the first pass the bootstrap runs in
@@ -24,49 +21,33 @@
 //! The chains are dealt into `CHAIN_GROUPS` groups with the same mix of path lengths, each
 //! group's chains starting from its own disjoint share of the bootstrap samples
 //! (`bootstrap::Seeding`), so that the groups are independent and identically distributed
-//! estimates of the image; the image is their mean. Every estimate is
-//! normalised (pbrt-v3 section 16.4.4: b over the steps per pixel) per path length: in group
-//! g, a pass's splats from a chain of length k carry weight b_k / c_{k,g}, c_{k,g} the group's
-//! number of chains of that length, so the image does not depend on how the random seeding
-//! happened to split the chains between lengths (with one b for all, length k's image would
-//! be scaled by (c_k / C) / (b_k / b), a few percent off for a thousand chains). b_k starts as
-//! the bootstrap's mean and is refined after every pass with the target values of the pass's
-//! large-step proposals, which are independent uniform samples (Kelemen et al. 2002): the
-//! bootstrap's error (about 2 % with 10^5 samples where a small light is seen directly) then
-//! fades as the run goes on.
+//! estimates of the image; the image is their mean. Every estimate is normalised (pbrt-v3
+//! section 16.4.4: b over the steps per pixel) per path length: in group g, a pass's splats
+//! from a chain of length k carry weight b_k / c_{k,g}, c_{k,g} the group's number of chains
+//! of that length, so the image does not depend on how the random seeding happened to split
+//! the chains between lengths. b_k starts as the bootstrap's mean and is refined after every
+//! pass with the target values of the pass's large-step proposals, which are independent
+//! uniform samples (Kelemen et al. 2002), so the bootstrap's error fades as the run goes on.
+//! What each of these choices was measured against is in DESIGN.md section 5.
 //!
-//! Remaining error: the passes of a chain are correlated (a chain lingers), so their spread
-//! says nothing of the error. The groups' estimates are independent, so their sample variance
-//! over G is the variance of their mean, the image, whatever the correlation along each chain
-//! (batch means over independent chains rather than over time, which would need batches
-//! longer than the chains' memory). Seeding every group from the same bootstrap samples, as
-//! first built, made them agree with each other more than with the truth: on the door scene
-//! with 10^4 bootstrap samples per length, the estimate was a ninth of the true error. Seeding
-//! each from its own share but letting each draw its own mix of lengths made them disagree
-//! more: a group with one chain of a length weighs it as much as one with a hundred (a
-//! noisier image, and an estimate up to three times the error). What the groups share, the
-//! normalisation b, adds its own relative variance times x^2: the bootstrap's and large
-//! steps' spread of target values per length over their count. The direct part adds its own
-//! variance (its passes are independent). The denominator r^2 comes from the groups'
-//! estimates and, for pixels only one group has found, from the image of the large-step
-//! proposals alone (`error_estimate::robust_reference_sq`): a large step ignores the chain's
-//! state, so those proposals are independent uniform samples of each length, as the
-//! bootstrap's, and each pass's, weighted by pixels over the expected number of large steps
-//! of its length, is an unbiased image.
+//! Remaining error: `error.rs`.
 
 pub mod bootstrap;
 pub mod chain;
+mod error;
 pub mod histogram;
 pub mod path_sample;
+mod report;
+mod settings;
 pub mod technique_choice;
 
-use crate::error_estimate::{self, ErrorEstimate, PixelError};
+use crate::error_estimate::ErrorEstimate;
 use crate::film::Film;
 use crate::image::Image;
 use crate::integrators::path_tracer::PathSettings;
 use crate::integrators::pixel_pass::{PixelEstimator, Row, pixel_pass};
 use crate::integrators::{
-    Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PlotKind, PlotSeries, RenderContext,
+    Cancelled, Integrator, ParamValues, PassStats, PlotSeries, RenderContext,
 };
 use crate::sampling::sampler::Sampler;
 use chain::{Chain, ChainOutput};
@@ -74,70 +55,10 @@ use glam::{DVec3, Vec3};
 use histogram::TechniqueHistogram;
 use path_sample::{Subpaths, slot_count};
 use rayon::prelude::*;
+pub use report::technique_name;
+pub use settings::MmltSettings;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
-
-#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
-pub struct MmltSettings {
-    #[serde(rename = "large_step")]
-    pub large_step_prob: f64,
-    pub sigma: f64,
-    /// Bootstrap samples per path length.
-    pub bootstrap: u64,
-    pub chains: u64,
-    /// Longest path, in bounces.
-    pub max_depth: u32,
-}
-
-impl MmltSettings {
-    pub const PARAMS: &'static [ParamSpec] = &[
-        ParamSpec::new(
-            "large_step",
-            "Probability of a large step (every coordinate drawn anew). 1 is an independent sampler; 0 is valid but chains can stick.",
-            0.3,
-            (0.0, 1.0),
-        )
-        .live(),
-        ParamSpec::new(
-            "sigma",
-            "Standard deviation of a small step in primary sample space (Kelemen et al. 2002).",
-            0.01,
-            (1e-5, 1.0),
-        )
-        .live(),
-        ParamSpec::new(
-            "bootstrap",
-            "Independent samples per path length that estimate the normalisation and seed the chains.",
-            100_000.0,
-            (1.0, 1e8),
-        )
-        .integer(),
-        ParamSpec::new(
-            "chains",
-            "Number of Markov chains.",
-            1000.0,
-            (1.0, 1e6),
-        )
-        .integer(),
-        ParamSpec::new(
-            "max_depth",
-            "Longest path, in bounces. Paths of 0 and 1 bounce are path traced; each longer length up to 9 has its own chains, and the lengths from 10 on share one family, which visits the shorter ones more often.",
-            64.0,
-            (0.0, 64.0),
-        )
-        .integer(),
-    ];
-
-    pub fn from_params(p: &ParamValues) -> Self {
-        crate::integrators::params::read_settings(Self::PARAMS, p)
-    }
-}
-
-impl Default for MmltSettings {
-    fn default() -> Self {
-        Self::from_params(&ParamValues::new())
-    }
-}
 
 pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
     Box::new(Mmlt::new(ctx, MmltSettings::from_params(params)))
@@ -305,53 +226,8 @@ impl Mmlt {
         }
     }
 
-    /// The share of pixels where some chain has splatted anything: where it is below the share
-    /// of pixels that paths of 2 bounces or more reach, chains have not found the rest yet.
-    pub fn chain_coverage(&self) -> f64 {
-        let pixels = self.direct.width * self.direct.height;
-        let reached = (0..pixels)
-            .filter(|&i| self.group_splats.iter().any(|g| g[i] != DVec3::ZERO))
-            .count();
-        reached as f64 / pixels.max(1) as f64
-    }
-
     pub fn histogram(&self) -> &TechniqueHistogram {
         &self.histogram
-    }
-
-    /// The slots whose chains outnumber `CHAINS_PER_START` times the distinct paths they
-    /// start from (`Bootstrap::effective_samples`), named for the user, e.g. "5 bounces
-    /// (456 chains, about 10 paths)"; None if there are none.
-    fn few_starts(&self) -> Option<String> {
-        let Phase::Running {
-            chains_per_length, ..
-        } = &self.phase
-        else {
-            return None;
-        };
-        let max_depth = self.settings.max_depth as usize;
-        let per_slot = chains_per_slot(chains_per_length);
-        let few: Vec<String> = (0..self.bootstrap_effective.len())
-            .filter_map(|k| {
-                let chains = per_slot[k];
-                let starts = self.bootstrap_effective[k];
-                (chains as f64 > CHAINS_PER_START * starts).then(|| {
-                    let lengths = path_sample::slot_lengths(k, max_depth);
-                    let bounces = if lengths.start() == lengths.end() {
-                        format!("{k} bounces")
-                    } else {
-                        format!("{} bounces and more", lengths.start())
-                    };
-                    let paths = if starts.round() == 1.0 {
-                        "path"
-                    } else {
-                        "paths"
-                    };
-                    format!("{bounces} ({chains} chains, about {starts:.0} {paths})")
-                })
-            })
-            .collect();
-        (!few.is_empty()).then(|| few.join(", "))
     }
 
     /// The normalisation b (None before the bootstrap).
@@ -627,16 +503,6 @@ fn chains_per_slot(chains_per_length: &[Vec<u64>]) -> Vec<u64> {
         .collect()
 }
 
-/// Technique (s, t) of path length k, as the plots name it. For k = 0 the only technique is
-/// (0, 2) (see `path_sample`).
-pub fn technique_name(k: usize, s: usize) -> String {
-    if k == 0 {
-        "s = 0, t = 2".to_string()
-    } else {
-        format!("s = {s}, t = {}", k + 2 - s)
-    }
-}
-
 impl Integrator for Mmlt {
     fn preparing(&self) -> Option<f32> {
         match &self.phase {
@@ -737,78 +603,7 @@ impl Integrator for Mmlt {
     }
 
     fn error_estimate(&self) -> Option<ErrorEstimate> {
-        if matches!(self.phase, Phase::Black) {
-            return self.direct.error_estimate();
-        }
-        let scale = self.group_scale()?;
-        let Phase::Running {
-            groups,
-            b_sum,
-            b_sum_sq,
-            b_count,
-            ..
-        } = &self.phase
-        else {
-            return None;
-        };
-        let groups = *groups;
-        if groups < 2 {
-            return None;
-        }
-        // Relative variance of b = sum of b_k: each b_k's sample variance over its count.
-        let (mut b, mut b_variance) = (0.0, 0.0);
-        for k in 0..b_sum.len() {
-            let n = b_count[k].max(1) as f64;
-            let mean = b_sum[k] / n;
-            b += mean;
-            b_variance += (b_sum_sq[k] / n - mean * mean).max(0.0) / (n - 1.0).max(1.0);
-        }
-        let b_relative_variance = if b > 0.0 { b_variance / (b * b) } else { 0.0 };
-        let g = groups as f64;
-        let (w, h) = (
-            self.ctx.camera.width as usize,
-            self.ctx.camera.height as usize,
-        );
-        // Each group's estimate of the whole image: its chains' part plus the direct part,
-        // which all groups share (it adds its own variance below, not to the spread).
-        let direct: Vec<DVec3> = (0..w * h).map(|i| self.direct.mean(i)).collect();
-        let plus_direct = |part: &[DVec3], scale: f64| -> Vec<DVec3> {
-            part.par_iter()
-                .zip(&direct)
-                .map(|(v, d)| *v * scale + *d)
-                .collect()
-        };
-        let estimates: Vec<Vec<DVec3>> = self.group_splats[..groups]
-            .iter()
-            .map(|splats| plus_direct(splats, scale))
-            .collect();
-        let large_steps = (self.large_step_passes > 0)
-            .then(|| plus_direct(&self.large_step_image, 1.0 / self.large_step_passes as f64));
-        let reference_sq =
-            error_estimate::robust_reference_sq(&estimates, large_steps.as_deref(), w, h);
-        let pixels: Vec<PixelError> = (0..w * h)
-            .into_par_iter()
-            .map(|i| {
-                let mean = estimates.iter().map(|e| e[i]).sum::<DVec3>() / g;
-                let spread: DVec3 = estimates
-                    .iter()
-                    .map(|e| (e[i] - mean) * (e[i] - mean))
-                    .sum();
-                let chains = mean - direct[i];
-                PixelError {
-                    variance: spread / (g * (g - 1.0))
-                        + chains * chains * b_relative_variance
-                        + self.direct.variance_of_mean(i),
-                    bias_sq: DVec3::ZERO,
-                    reference_sq: reference_sq[i],
-                }
-            })
-            .collect();
-        ErrorEstimate::from_pixels(
-            self.ctx.camera.width as usize,
-            self.ctx.camera.height as usize,
-            &pixels,
-        )
+        self.estimate_error()
     }
 
     fn set_live_param(&mut self, name: &str, value: f64) {
@@ -820,107 +615,15 @@ impl Integrator for Mmlt {
     }
 
     fn plots(&self) -> Vec<PlotSeries> {
-        let mut plots = Vec::new();
-        for (k, l) in self.histogram.lengths.iter().enumerate() {
-            let total: u64 = l.steps_in_technique.iter().sum();
-            if total == 0 {
-                continue;
-            }
-            plots.push(PlotSeries {
-                plot: "Techniques".into(),
-                name: format!("k = {k}"),
-                kind: PlotKind::Bars,
-                x_label: format!("s light vertices, t = {} - s camera vertices", k + 2),
-                y_label: "share of steps".into(),
-                points: l
-                    .steps_in_technique
-                    .iter()
-                    .enumerate()
-                    .map(|(s, &c)| [s as f64, c as f64 / total as f64])
-                    .collect(),
-                point_names: (0..l.steps_in_technique.len())
-                    .map(|s| technique_name(k, s))
-                    .collect(),
-            });
-        }
-        let rates = |name: &str, f: fn(&histogram::LengthStats) -> f64| PlotSeries {
-            plot: "Acceptance".into(),
-            name: name.into(),
-            kind: PlotKind::Line,
-            x_label: "path length k".into(),
-            y_label: "acceptance rate".into(),
-            points: self
-                .histogram
-                .lengths
-                .iter()
-                .enumerate()
-                .filter(|(_, l)| l.large.proposed + l.small.proposed > 0)
-                .map(|(k, l)| [k as f64, f(l)])
-                .collect(),
-            point_names: Vec::new(),
-        };
-        if self.steps > 0 {
-            plots.push(rates("large steps", |l| l.large.rate()));
-            plots.push(rates("small steps", |l| l.small.rate()));
-            plots.push(rates("technique changes", |l| l.technique_change.rate()));
-        }
-        plots
+        self.technique_plots()
     }
 
     fn messages(&self) -> Vec<String> {
-        let mut m = Vec::new();
-        if matches!(self.phase, Phase::Black) && !self.direct_lit {
-            m.push("Nothing reaches the camera: every bootstrap path was black.".into());
-        }
-        if self.unsampled_share > 0.0 {
-            m.push(format!(
-                "{:.2} % of the image's energy is in path lengths no chain samples: use more chains.",
-                100.0 * self.unsampled_share
-            ));
-        }
-        if let Some(few) = self.few_starts() {
-            m.push(format!(
-                "Chains start on few distinct paths at {few}: that light stays blotchy until \
-                 the chains spread; a larger --bootstrap gives them more starts."
-            ));
-        }
-        if self.settings.large_step_prob == 0.0 {
-            m.push(
-                "Large-step probability 0: chains never jump and can stick in one region.".into(),
-            );
-        }
-        m
+        self.warnings()
     }
 
     fn statistics(&self) -> Option<serde_json::Value> {
-        let mut v = self.histogram.to_json();
-        v["normalisation_b"] = serde_json::json!(self.normalisation());
-        v["bootstrap_b_per_length"] = serde_json::json!(self.bootstrap_per_length);
-        v["bootstrap_b_per_path_length"] = serde_json::json!(self.bootstrap_per_path_length);
-        v["normalisation_standard_error"] = serde_json::json!(self.b_standard_error);
-        v["share_of_b_without_chains"] = serde_json::json!(self.unsampled_share);
-        v["chains"] = serde_json::json!(self.settings.chains);
-        v["seconds"] = serde_json::json!(self.seconds);
-        if let Phase::Running {
-            chains_per_length,
-            b_sum,
-            b_count,
-            ..
-        } = &self.phase
-        {
-            let chains = chains_per_slot(chains_per_length);
-            let b: Vec<f64> = b_sum
-                .iter()
-                .zip(b_count)
-                .map(|(s, &n)| s / n.max(1) as f64)
-                .collect();
-            v["chains_per_slot"] = serde_json::json!(chains);
-            v["bootstrap_lit_per_slot"] = serde_json::json!(self.bootstrap_lit);
-            v["bootstrap_effective_starts_per_slot"] = serde_json::json!(self.bootstrap_effective);
-            v["b_per_slot"] = serde_json::json!(b);
-        }
-        v["share_of_pixels_reached_by_chains"] = serde_json::json!(self.chain_coverage());
-        Some(v)
+        Some(self.statistics_json())
     }
 }
 

@@ -24,7 +24,9 @@
 mod error;
 pub mod hash_grid;
 pub mod hit_points;
+mod pixel_stats;
 
+use crate::camera::CameraDesc;
 use crate::error_estimate::ErrorEstimate;
 use crate::film::sanitize;
 use crate::geometry::luminance;
@@ -40,6 +42,7 @@ use crate::sampling::sampler::Sampler;
 use glam::{DVec3, Vec2, Vec3};
 use hash_grid::HashGrid;
 use hit_points::{HitPoint, trace_eye_path};
+use pixel_stats::{Gathered, PixelStats};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -121,85 +124,24 @@ impl PhotonMappingSettings {
 
 /// The automatic initial radius: four pixel footprints at the median distance at which the
 /// camera's rays, followed through specular surfaces, meet the surfaces that hold hit points
-/// (`transport::pixel_footprint_radius`, from 1024 camera paths). Measured where hit points
+/// (`pixel_footprint_radius`, from 1024 camera paths, `survey::survey_view`). Measured where hit points
 /// are rather than at the scene's centre, it stays right for a camera inside a room, or one
 /// seeing most of the scene through glass. A view that meets no surface falls back to the
 /// distance to the centre of the scene's bounds.
 pub fn auto_radius(ctx: &RenderContext) -> f64 {
-    let view = crate::transport::survey_view(&ctx.scene, &ctx.camera, 1024, ctx.seed);
+    let view = crate::survey::survey_view(&ctx.scene, &ctx.camera, 1024, ctx.seed);
     let distance = if view.median_hit_distance > 0.0 {
         view.median_hit_distance
     } else {
         (ctx.scene.bounds.center() - ctx.camera.position()).length() as f64
     };
-    crate::transport::pixel_footprint_radius(distance, ctx.camera.height, ctx.camera.desc())
+    pixel_footprint_radius(distance, ctx.camera.height, ctx.camera.desc())
 }
 
-#[derive(Clone, Copy, Debug, Default)]
-struct PixelStats {
-    /// Accumulated photon count N (fractional after the alpha reduction).
-    n: f64,
-    radius_sq: f64,
-    tau: DVec3,
-    direct_sum: DVec3,
-    photons_counted: u64,
-    /// Sums over passes of the one-pass estimates L_k and of their squares (PPPM's image is
-    /// their mean; for all variants their spread is the noise).
-    estimate_sum: DVec3,
-    estimate_sum_sq: DVec3,
-    /// The sum over odd passes: two independent halves for a robust r^2 (`error_estimate`).
-    odd_estimate_sum: DVec3,
-    /// Sums over passes of the one-pass bias estimates b_k and of their squares.
-    bias_sum: DVec3,
-    bias_sum_sq: DVec3,
-}
-
-impl PixelStats {
-    /// A pass's photons at this pixel (`m` of them carrying flux `tau_m`) added to its
-    /// statistics with the progressive radius reduction, Hachisuka et al. 2008, eqs. 5-7:
-    /// N' = N + alpha M, R'^2 = R^2 (N + alpha M) / (N + M), tau' = (tau + tau_M) times the
-    /// same ratio. The radius never falls below `floor_sq`.
-    fn add_photons(&mut self, m: u32, tau_m: DVec3, alpha: f64, floor_sq: f64) {
-        self.photons_counted += u64::from(m);
-        if m == 0 {
-            return;
-        }
-        let (n, mf) = (self.n, f64::from(m));
-        let ratio = (n + alpha * mf) / (n + mf);
-        self.n = n + alpha * mf;
-        self.radius_sq = (self.radius_sq * ratio).max(floor_sq);
-        self.tau = (self.tau + tau_m) * ratio;
-    }
-
-    /// The radiance the photons gathered so far estimate: tau / (pi R^2 N_emitted)
-    /// (Hachisuka et al. 2008, eq. 10).
-    fn indirect(&self, photons_emitted: u64) -> DVec3 {
-        if photons_emitted > 0 && self.radius_sq > 0.0 {
-            self.tau / (std::f64::consts::PI * self.radius_sq * photons_emitted as f64)
-        } else {
-            DVec3::ZERO
-        }
-    }
-}
-
-/// What a photon pass gathered at each pixel's hit point.
-struct Gathered {
-    /// New photon count M.
-    m: Vec<u32>,
-    /// Flux sum tau_M (beta f flux, not yet divided by anything).
-    tau: Vec<DVec3>,
-    /// The part of tau_M from photons within R / 2 (`INNER_RADIUS_RATIO`).
-    tau_inner: Vec<DVec3>,
-}
-
-impl Gathered {
-    fn new(n: usize) -> Self {
-        Gathered {
-            m: vec![0; n],
-            tau: vec![DVec3::ZERO; n],
-            tau_inner: vec![DVec3::ZERO; n],
-        }
-    }
+/// The initial gather radius: four pixel footprints at the median distance the camera sees
+/// surfaces at (a pixel there is 2 d tan(fov / 2) / height wide), through specular chains.
+pub fn pixel_footprint_radius(distance: f64, height: u32, camera: &CameraDesc) -> f64 {
+    4.0 * camera.pixel_size(distance, height)
 }
 
 pub struct PhotonMapper {
@@ -241,7 +183,7 @@ pub fn create_pppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
     create(ctx, Variant::Pppm, p)
 }
 
-const PHOTON_STREAM: u64 = 0x5eed_0f_9407_0715;
+const PHOTON_STREAM: u64 = 0x005e_ed0f_9407_0715;
 /// Eye paths draw from their own stream, so that next-event estimation at the hit point
 /// (keyed by pixel and pass too) is independent of the jitter and the specular choices.
 const EYE_STREAM: u64 = 0x0e7e_0a7b_5eed_0001;
@@ -558,7 +500,7 @@ impl PhotonMapper {
             .filter(|&i| self.hit_points[i].is_some())
             .map(|i| self.radius_sq(i).sqrt())
             .collect();
-        if radii.is_empty() || self.passes % self.history_stride != 0 {
+        if radii.is_empty() || !self.passes.is_multiple_of(self.history_stride) {
             return;
         }
         let mean = radii.iter().sum::<f64>() / radii.len() as f64;
@@ -713,50 +655,5 @@ impl Integrator for PhotonMapper {
                     .collect(),
             },
         ]
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Ten million passes of one pixel under a uniform photon density: each pass finds the
-    /// photons its shrinking disc holds (1000 at first, about 5 at the end, whole numbers with
-    /// the fraction carried to the next pass), 10^5 photons emitted a pass (10^12 in all). The
-    /// estimate tau / (pi R^2 N_emitted) stays at density x flux / photons per pass within
-    /// 1e-6: the sums' rounding over 10^7 updates does not drift and no counter overflows
-    /// (tau and R^2 kept in f32 drift by over 1e-3 here).
-    #[test]
-    fn ten_million_photon_passes_keep_the_estimate() {
-        let (alpha, photons_per_pass, passes) = (2.0 / 3.0, 100_000u64, 10_000_000u64);
-        let density = 1000.0 / std::f64::consts::PI; // photons per unit area per pass
-        let flux = 0.37; // per photon
-        let mut px = PixelStats {
-            radius_sq: 1.0,
-            ..Default::default()
-        };
-        let (mut carried, mut counted) = (0.0f64, 0u64);
-        for _ in 0..passes {
-            let expected = density * std::f64::consts::PI * px.radius_sq + carried;
-            let m = expected.floor();
-            carried = expected - m;
-            counted += m as u64;
-            px.add_photons(m as u32, DVec3::splat(m * flux), alpha, 0.0);
-        }
-        let emitted = photons_per_pass * passes;
-        let exact = density * flux / photons_per_pass as f64;
-        let estimate = px.indirect(emitted).x;
-        assert!(
-            ((estimate - exact) / exact).abs() < 1e-6,
-            "{estimate} against {exact}"
-        );
-        assert_eq!(px.photons_counted, counted);
-        // The radius shrank as the analysis says, R^2 ~ passes^-(1 - alpha) (within a factor 2).
-        let predicted = (passes as f64).powf(-(1.0 - alpha));
-        assert!(
-            px.radius_sq > 0.5 * predicted && px.radius_sq < 2.0 * predicted,
-            "{}",
-            px.radius_sq
-        );
     }
 }

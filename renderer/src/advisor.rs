@@ -1,13 +1,5 @@
-//! What light transport a scene has, and which estimator it therefore needs ("model only what
-//! a scene requires"). A survey traces a few thousand camera paths and light paths, which
-//! takes milliseconds, and measures what decides between the estimators:
-//!
-//! - how much of the view is seen through specular surfaces (paths E S+ D: glass, mirrors),
-//! - how much of the light reaching diffuse or glossy surfaces has passed specular ones first
-//!   (L S+ D: caustics), and how much of that comes from delta lights (point, spot,
-//!   directional),
-//! - how much of what the camera sees has a light in direct view (the rest is lit through
-//!   openings or by interreflection only), and how much of it is glossy.
+//! Which estimator a scene needs, and why ("model only what a scene requires"), from a survey
+//! of its light transport (`survey.rs`).
 //!
 //! From that follow hard limits and a recommendation. A caustic from a delta light seen
 //! through a specular surface (L S+ D S+ E, a point light's caustic seen through water) has no
@@ -19,45 +11,11 @@
 //! the light is shaped; where the camera sees little direct light, bidirectional methods do;
 //! otherwise the path tracer, simplest and unbiased, is hard to beat.
 
-use crate::camera::{Camera, CameraDesc};
+use crate::camera::CameraDesc;
 use crate::integrators::ParamValues;
-use crate::integrators::path_tracer::sample_direct;
-use crate::integrators::scatter;
-use crate::light::emission::emit_photon;
-use crate::material::{Bsdf, TransportMode};
-use crate::sampling::sampler::Sampler;
+use crate::integrators::ppm::pixel_footprint_radius;
 use crate::scene::Scene;
-use glam::Vec2;
-
-/// Bounces followed through specular surfaces before a path is given up.
-const MAX_SPECULAR_DEPTH: u32 = 16;
-/// Microfacet roughness (alpha) below which a surface counts as glossy.
-const GLOSSY_ALPHA: f32 = 0.2;
-
-/// What a survey of camera and light paths found.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct TransportSurvey {
-    pub camera_paths: usize,
-    pub light_paths: usize,
-    /// Of the camera paths that reach a non-specular surface, the share that got there
-    /// through at least one specular bounce (E S+ D).
-    pub seen_through_specular: f64,
-    /// Of the same, the share whose surface is glossy (a microfacet lobe with alpha < 0.2).
-    pub glossy: f64,
-    /// Of the same, the share with a light in direct view (a next-event sample unoccluded).
-    pub directly_lit: f64,
-    /// The share of the camera paths that reach no surface (background, escaped).
-    pub background: f64,
-    /// Of the lights' power, the share in delta lights (point, spot, directional).
-    pub delta_light_power: f64,
-    /// Of the flux photons bring to their first non-specular surface, the share that passed
-    /// at least one specular surface first (L S+ D).
-    pub caustic_flux: f64,
-    /// The part of `caustic_flux` that comes from delta lights.
-    pub delta_caustic_flux: f64,
-    /// Median length of the camera paths to their first non-specular vertex (scene units).
-    pub median_hit_distance: f64,
-}
+use crate::survey::{TransportSurvey, survey_at};
 
 /// An integrator a scene needs, with its parameters and the reasons.
 #[derive(Clone, Debug, PartialEq)]
@@ -70,158 +28,11 @@ pub struct Recommendation {
     pub cannot_converge: Vec<(&'static str, String)>,
 }
 
-fn is_glossy(bsdf: &Bsdf) -> bool {
-    match bsdf {
-        Bsdf::MetallicRoughness(m) => m.distrib.alpha < GLOSSY_ALPHA,
-        _ => false,
-    }
-}
-
-/// Traces `camera_paths` camera paths (stratified over the image) and `light_paths` light
-/// paths; deterministic for a given seed.
-pub fn survey(
-    scene: &Scene,
-    camera: &Camera,
-    camera_paths: usize,
-    light_paths: usize,
-    seed: u64,
-) -> TransportSurvey {
-    let mut s = TransportSurvey {
-        camera_paths,
-        light_paths,
-        ..Default::default()
-    };
-    let view = survey_view(scene, camera, camera_paths, seed);
-    s.seen_through_specular = view.seen_through_specular;
-    s.glossy = view.glossy;
-    s.directly_lit = view.directly_lit;
-    s.background = view.background;
-    s.median_hit_distance = view.median_hit_distance;
-    let mut sampler = Sampler::new(seed ^ 0x5a7e_e7a1_0000_0002);
-
-    // Light paths, lights chosen by power as the photon mappers choose them.
-    let total_power: f64 = (0..scene.lights.len())
-        .map(|i| scene.light_sampler.pmf(i) as f64)
-        .sum();
-    s.delta_light_power = if total_power > 0.0 {
-        (0..scene.lights.len())
-            .filter(|&i| scene.lights[i].is_delta())
-            .map(|i| scene.light_sampler.pmf(i) as f64)
-            .sum::<f64>()
-            / total_power
-    } else {
-        0.0
-    };
-    let (mut flux_all, mut flux_caustic, mut flux_delta_caustic) = (0.0f64, 0.0f64, 0.0f64);
-    for i in 0..light_paths {
-        sampler.start_pixel_sample(i as u64, 1);
-        let Some((light, mut ray, mut flux)) = emit_photon(scene, &mut sampler) else {
-            continue;
-        };
-        for depth in 0..=MAX_SPECULAR_DEPTH {
-            let Some(si) = scene.intersect(&ray) else {
-                break;
-            };
-            let bsdf = scene.bsdf(&si);
-            if !bsdf.is_delta() {
-                let power = crate::geometry::luminance(flux) as f64;
-                if power.is_finite() {
-                    flux_all += power;
-                    if depth > 0 {
-                        flux_caustic += power;
-                        if scene.lights[light].is_delta() {
-                            flux_delta_caustic += power;
-                        }
-                    }
-                }
-                break;
-            }
-            let wo = si.shading.to_local(si.wo);
-            let Some(next) = scatter(&si, &bsdf, wo, &mut sampler, TransportMode::Importance)
-            else {
-                break;
-            };
-            flux *= next.weight;
-            ray = next.ray;
-        }
-    }
-    if flux_all > 0.0 {
-        s.caustic_flux = flux_caustic / flux_all;
-        s.delta_caustic_flux = flux_delta_caustic / flux_all;
-    }
-    s
-}
-
-/// The camera half of the survey: `paths` camera paths on a jittered grid over the image,
-/// followed through specular bounces to their first non-specular vertex (or given up after
-/// `MAX_SPECULAR_DEPTH`); fills the view's shares and the median hit distance.
-pub fn survey_view(scene: &Scene, camera: &Camera, paths: usize, seed: u64) -> TransportSurvey {
-    let mut s = TransportSurvey {
-        camera_paths: paths,
-        ..Default::default()
-    };
-    let camera_paths = paths;
-    let mut sampler = Sampler::new(seed ^ 0x5a7e_e7a1_0000_0001);
-    let mut rays = 0u64;
-    // Camera paths on a jittered grid over the image.
-    let side = (camera_paths as f64).sqrt().ceil().max(1.0) as usize;
-    let (mut surfaces, mut through, mut glossy, mut lit) = (0usize, 0usize, 0usize, 0usize);
-    let mut distances = Vec::new();
-    for i in 0..camera_paths {
-        sampler.start_pixel_sample(i as u64, 0);
-        let cell = Vec2::new((i % side) as f32, (i / side % side) as f32);
-        let film = (cell + sampler.get_2d()) / side as f32
-            * Vec2::new(camera.width as f32, camera.height as f32);
-        let mut ray = camera.generate_ray(film);
-        let mut length = 0.0f32;
-        for depth in 0..=MAX_SPECULAR_DEPTH {
-            let Some(si) = scene.intersect(&ray) else {
-                break;
-            };
-            length += si.t * ray.d.length();
-            let bsdf = scene.bsdf(&si);
-            let wo = si.shading.to_local(si.wo);
-            if !bsdf.is_delta() {
-                surfaces += 1;
-                through += usize::from(depth > 0);
-                glossy += usize::from(is_glossy(&bsdf));
-                distances.push(length as f64);
-                let seen = (0..4).any(|_| {
-                    sample_direct(scene, &si, &bsdf, wo, &mut sampler, &mut rays, false)
-                        .max_element()
-                        > 0.0
-                });
-                lit += usize::from(seen);
-                break;
-            }
-            let Some(next) = scatter(&si, &bsdf, wo, &mut sampler, TransportMode::Radiance) else {
-                break;
-            };
-            ray = next.ray;
-        }
-    }
-    let share = |n: usize, of: usize| if of > 0 { n as f64 / of as f64 } else { 0.0 };
-    s.seen_through_specular = share(through, surfaces);
-    s.glossy = share(glossy, surfaces);
-    s.directly_lit = share(lit, surfaces);
-    s.background = share(camera_paths - surfaces, camera_paths);
-    distances.sort_by(f64::total_cmp);
-    s.median_hit_distance = distances.get(distances.len() / 2).copied().unwrap_or(0.0);
-
-    s
-}
-
 /// The survey at an output size (4096 camera paths, 8192 light paths) and what follows from it.
 pub fn analyse(scene: &Scene, width: u32, height: u32) -> (TransportSurvey, Recommendation) {
     let s = survey_at(scene, width, height);
     let r = s.recommend(width, height, &scene.camera);
     (s, r)
-}
-
-/// The standard survey (4096 camera paths, 8192 light paths) for a `width` x `height` image.
-pub fn survey_at(scene: &Scene, width: u32, height: u32) -> TransportSurvey {
-    let camera = Camera::new(&scene.camera, width, height);
-    survey(scene, &camera, 4096, 8192, 1)
 }
 
 /// The share above which a kind of transport counts as present.
@@ -343,12 +154,6 @@ impl TransportSurvey {
     }
 }
 
-/// The initial gather radius: four pixel footprints at the median distance the camera sees
-/// surfaces at (a pixel there is 2 d tan(fov / 2) / height wide), through specular chains.
-pub fn pixel_footprint_radius(distance: f64, height: u32, camera: &CameraDesc) -> f64 {
-    4.0 * camera.pixel_size(distance, height)
-}
-
 /// Photons per pass: one per pixel, so that the photon pass and the eye pass cost about the
 /// same (each is one path per item), within 10^4 and 10^6.
 pub fn photons_per_pass(width: u32, height: u32) -> u64 {
@@ -358,7 +163,9 @@ pub fn photons_per_pass(width: u32, height: u32) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::Camera;
     use crate::procedural::{caustic_pool, cornell_box, door};
+    use crate::survey::survey;
     use glam::Vec3;
 
     fn lens() -> CameraDesc {

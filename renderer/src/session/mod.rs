@@ -4,13 +4,16 @@
 //! waiting on any lock the workers hold, and frames are never queued: the newest wins.
 //! Cancellation is checked per image row, so it takes effect within a fraction of a pass.
 
+mod frame;
+
+pub use frame::{Frame, RunState};
+
 use crate::camera::{Camera, CameraDesc};
 use crate::error_estimate::ErrorEstimate;
 use crate::image::Image;
 use crate::integrators::{
     self, Integrator, ParamValues, PassStats, PixelLayer, PlotSeries, RenderContext,
 };
-use crate::metadata::RunDescription;
 use crate::preview;
 use crate::scene::Scene;
 use arc_swap::ArcSwap;
@@ -56,6 +59,22 @@ pub struct SessionConfig {
     pub memory_limit: Option<u64>,
 }
 
+/// The run an image came from: the integrator with its parameters as they stand (live
+/// changes included), the seed, the scene file and the worker threads actually used.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunDescription {
+    pub integrator: String,
+    pub params: ParamValues,
+    pub seed: u64,
+    pub scene: std::path::PathBuf,
+    /// What lit the scene from outside (`SceneInfo::lighting`), with its strength and
+    /// rotation when it has them.
+    pub environment: String,
+    /// The view rendered.
+    pub camera: CameraDesc,
+    pub threads: usize,
+}
+
 pub type FrameCallback = Arc<dyn Fn() + Send + Sync>;
 
 impl SessionConfig {
@@ -80,64 +99,6 @@ impl SessionConfig {
             panic_in_pass: None,
             memory_limit: None,
         }
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RunState {
-    Running,
-    Paused,
-    /// Reached its pass or time limit, or its target error.
-    Finished,
-    Cancelled,
-    /// A pass panicked (`Frame::failure` says where and why); the image is that of the
-    /// passes before it, and a new session starts afresh.
-    Failed,
-}
-
-/// A snapshot of a session: the normalised estimate and its counters.
-#[derive(Clone, Debug)]
-pub struct Frame {
-    pub image: Arc<Image>,
-    /// Plots the integrator offers (drawn by the viewer beside the convergence plot).
-    pub plots: Arc<Vec<PlotSeries>>,
-    /// Per-pixel statistics of the integrator (shown by the viewer's pixel inspector).
-    pub pixel_layers: Arc<Vec<PixelLayer>>,
-    /// Warnings and notes of the integrator about its current state (shown to the user).
-    pub messages: Arc<Vec<String>>,
-    /// The integrator's statistics as JSON, if it keeps any (MMLT's technique histogram).
-    pub statistics: Arc<Option<serde_json::Value>>,
-    /// The values the integrator chose for parameters left automatic (`Integrator::automatic`).
-    pub automatic: Arc<Vec<(&'static str, f64)>>,
-    /// Bytes of the integrator's own buffers (`Integrator::memory_bytes`).
-    pub integrator_memory_bytes: usize,
-    /// The image's remaining error estimated without a reference (None until the integrator
-    /// has enough samples to estimate it). Renewed after every pass where that costs little,
-    /// else as often as it costs a tenth of the time, and at least whenever the passes have
-    /// grown by a tenth (so it may be a few passes old), and always for a run's last frame.
-    pub error: Arc<Option<ErrorEstimate>>,
-    pub passes: u64,
-    pub samples: u64,
-    pub rays: u64,
-    pub dropped: u64,
-    pub elapsed: Duration,
-    pub state: RunState,
-    /// The image is the quick, coarse look at the scene shown until the first pass ends
-    /// (`preview`), not the integrator's estimate.
-    pub preview: bool,
-    /// While the integrator prepares (MMLT's bootstrap), the share done; its image is then
-    /// already an estimate, but no pass is counted yet.
-    pub preparation: Option<f32>,
-    /// Why the session failed, when `state` is `Failed`.
-    pub failure: Option<Arc<str>>,
-}
-
-impl Frame {
-    /// Samples per second from an earlier frame's `(samples, elapsed)` to this one: the
-    /// render's steady rate when the earlier frame is the first pass (start-up excluded).
-    pub fn samples_per_second_since(&self, (samples, elapsed): (u64, Duration)) -> Option<f64> {
-        let seconds = self.elapsed.saturating_sub(elapsed).as_secs_f64();
-        (seconds > 0.0).then(|| self.samples.saturating_sub(samples) as f64 / seconds)
     }
 }
 

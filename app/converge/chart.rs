@@ -2,7 +2,7 @@
 //! colour per run, the true relMSE solid and the estimated relMSE dashed (plotters, drawn into
 //! memory and saved with the `image` crate, with egui's own font so no system font is needed).
 
-use crate::converge::Record;
+use super::record::Record;
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;

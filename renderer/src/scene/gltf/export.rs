@@ -16,7 +16,7 @@ struct BufferWriter {
 
 impl BufferWriter {
     fn push(&mut self, data: &[u8], target: u32, accessor: Value) -> usize {
-        while self.bytes.len() % 4 != 0 {
+        while !self.bytes.len().is_multiple_of(4) {
             self.bytes.push(0);
         }
         self.views.push(json!({"buffer": 0, "byteOffset": self.bytes.len(), "byteLength": data.len(), "target": target}));
@@ -49,7 +49,7 @@ fn floats<T, const N: usize>(
 ) -> (Vec<u8>, usize, &'static str) {
     let data = values
         .iter()
-        .flat_map(|v| components(v))
+        .flat_map(components)
         .flat_map(f32::to_le_bytes)
         .collect();
     let kind = match N {
