@@ -56,6 +56,9 @@ fn rel_mse_at(
 /// `allowance` for what the theory leaves out (MMLT's start and its normalisation's error,
 /// which large steps refine as the run goes; none for pt and bdpt, whose expected relMSE is
 /// exactly C / n). A wrong weight or normalisation that grows or fades with n cannot pass.
+/// MMLT is fitted from 32 passes (before, its start still shows: -0.95 from 16) to 512: its
+/// mean slope was -0.998 +- 0.010 there, as close as to 1024 (-0.988 +- 0.004), at half the
+/// cost, which was nine tenths of this test's.
 #[test]
 fn unbiased_estimators_converge_like_one_over_n() {
     let scene = Arc::new(Scene::build(sphere_with_point_light(64)).unwrap());
@@ -65,7 +68,7 @@ fn unbiased_estimators_converge_like_one_over_n() {
         (
             "mmlt",
             &[("bootstrap", 10_000.0)],
-            &[32, 64, 128, 256, 512, 1024],
+            &[32, 64, 128, 256, 512],
             0.1,
         ),
     ];

@@ -11,7 +11,12 @@
 //! product makes (see README): the mean estimate is within a factor of two of the mean true
 //! relMSE at every checkpoint, from the first checkpoints on. At these sizes the first
 //! checkpoint comes after 10 to 300 ms of rendering on two cores (after MMLT's bootstrap),
-//! the last after 0.1 to 3 s.
+//! the last after 0.1 to 3 s. MMLT and the photon mappers stop at 64 passes, where their
+//! passes cost most (chains over eight seeds; 20,000 photons a pass) and their error is
+//! settled: on the door the ratio at 256 passes, when it was checked too, was 1.02 for MMLT
+//! and 0.92 to 1.06 for the photon mappers (their error is bias from 16 passes on), against
+//! 0.92 to 1.14 at 64, so the fourth checkpoint cost four fifths of the test and told
+//! nothing the third did not.
 //!
 //! A reference rendered for the test has its own error, which adds to the measured one; it is
 //! kept below a tenth of the smallest error it is compared with (the figures are printed).
@@ -270,7 +275,7 @@ fn on_cornell_glass_every_estimate_tracks_the_true_error() {
     let runs: [Run; 6] = [
         ("pt", &[], &[4, 16, 64, 256]),
         ("bdpt", &[], &[4, 16, 64]),
-        ("mmlt", &[("bootstrap", 10_000.0)], &[4, 16, 64, 256]),
+        ("mmlt", &[("bootstrap", 10_000.0)], &[4, 16, 64]),
         ("sppm", &photons, &[8, 16, 64]),
         ("pppm", &photons, &[8, 16, 64]),
         ("ppm", &photons, &[8, 16, 64]),
@@ -295,11 +300,11 @@ fn on_the_door_every_estimate_tracks_the_true_error() {
         (
             "mmlt",
             &[("max_depth", 10.0), ("bootstrap", 30_000.0)],
-            &[16, 64, 256],
+            &[16, 64],
         ),
-        ("sppm", &photons, &[16, 64, 256]),
-        ("pppm", &photons, &[16, 64, 256]),
-        ("ppm", &photons, &[16, 64, 256]),
+        ("sppm", &photons, &[16, 64]),
+        ("pppm", &photons, &[16, 64]),
+        ("ppm", &photons, &[16, 64]),
     ];
     check_bundled("door", &scene, &runs, &reference, reference_error);
 }
@@ -315,7 +320,7 @@ fn on_the_caustic_pool_every_estimate_tracks_the_true_error() {
     let runs: [Run; 6] = [
         ("pt", &[], &[16, 64, 256]),
         ("bdpt", &[], &[4, 16, 64]),
-        ("mmlt", &[("bootstrap", 30_000.0)], &[16, 64, 256]),
+        ("mmlt", &[("bootstrap", 30_000.0)], &[16, 64]),
         ("sppm", &photons, &[8, 16, 64]),
         ("pppm", &photons, &[8, 16, 64]),
         ("ppm", &photons, &[8, 16, 64]),
