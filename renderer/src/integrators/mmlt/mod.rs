@@ -428,28 +428,44 @@ impl Mmlt {
             self.settings.sigma as f32,
         );
         let max_depth = self.settings.max_depth as usize;
-        let results: Vec<(ChainOutput, TechniqueHistogram)> = chains
+        // One histogram per piece of work rayon splits the chains into, not one per chain:
+        // a histogram is (max_depth + 1)(max_depth + 4) / 2 counters, and a small image gives
+        // each chain only a step or two a pass (24 x 24 pixels over 1000 chains at depth 64:
+        // allocating, zeroing and merging a histogram per chain was half of the pass). Counts
+        // add up in any order, so the histogram does not depend on the split.
+        let mut outputs: Vec<ChainOutput> = chains.iter().map(|_| ChainOutput::default()).collect();
+        let histogram = chains
             .par_iter_mut()
-            .map_init(Subpaths::default, |scratch, chain| {
-                if cancel.load(Ordering::Relaxed) {
-                    return Err(Cancelled);
-                }
-                let mut out = ChainOutput::default();
-                let mut histogram = TechniqueHistogram::new(max_depth);
-                chain.run(
-                    scene,
-                    camera,
-                    steps,
-                    p_large,
-                    sigma,
-                    scratch,
-                    &mut histogram,
-                    &mut out,
-                    cancel,
-                )?;
-                Ok((out, histogram))
+            .zip(outputs.par_iter_mut())
+            .try_fold(
+                || (Subpaths::default(), TechniqueHistogram::new(max_depth)),
+                |(mut scratch, mut histogram), (chain, out)| {
+                    if cancel.load(Ordering::Relaxed) {
+                        return Err(Cancelled);
+                    }
+                    chain.run(
+                        scene,
+                        camera,
+                        steps,
+                        p_large,
+                        sigma,
+                        &mut scratch,
+                        &mut histogram,
+                        out,
+                        cancel,
+                    )?;
+                    Ok((scratch, histogram))
+                },
+            )
+            .map(|piece| piece.map(|(_, histogram)| histogram))
+            .try_reduce_with(|mut a, b| {
+                a.merge(&b);
+                Ok(a)
             })
-            .collect::<Result<_, _>>()?;
+            .transpose()?;
+        if let Some(histogram) = histogram {
+            self.histogram.merge(&histogram);
+        }
         // This pass's weights, b_k / c_{k,g}, come from b_k as it was before the pass.
         let b: Vec<f64> = (0..b_sum.len())
             .map(|k| b_sum[k] / b_count[k] as f64)
@@ -463,7 +479,7 @@ impl Mmlt {
             .collect();
         let large_step_pass = p_large > 0.0;
         self.large_step_passes += u64::from(large_step_pass);
-        for (c, ((out, histogram), chain)) in results.into_iter().zip(chains.iter()).enumerate() {
+        for (c, (out, chain)) in outputs.into_iter().zip(chains.iter()).enumerate() {
             let g = chain_groups[c];
             if large_step_pass {
                 let weight = pixels as f64 / large_steps_expected[chain.slot];
@@ -476,7 +492,6 @@ impl Mmlt {
             b_sum[chain.slot] += out.large_step_sum;
             b_sum_sq[chain.slot] += out.large_step_sum_sq;
             b_count[chain.slot] += out.large_steps;
-            self.histogram.merge(&histogram);
             self.steps += steps;
             stats.samples += steps;
             stats.rays += out.rays;
