@@ -249,12 +249,6 @@ impl Scene {
         &self.materials[self.attributes[triangle as usize].material as usize]
     }
 
-    /// Point and texture coordinates at barycentrics `b` of a triangle.
-    pub fn triangle_point(&self, triangle: u32, b: Vec3) -> (Vec3, TexCoords) {
-        let t = triangle as usize;
-        (interpolate3(&self.positions[t], b), self.tex_coords(t, b))
-    }
-
     /// The vertex colour at barycentrics `b` of triangle `t`.
     fn vertex_color(&self, t: usize, b: Vec3) -> Vec4 {
         self.colors
