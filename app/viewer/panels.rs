@@ -44,7 +44,8 @@ fn commit_value(response: &egui::Response, live: bool) -> bool {
 /// and the panel's rows come and go (the lighting label, a loading row): a slider's id then
 /// changes for a frame, and a drag or an accessibility action aimed at it is lost or lands on
 /// its neighbour (measured: the environment's strength or rotation, in 11 of 12 runs of the
-/// panel's test run alone).
+/// panel's test run alone; the exposure, in 1 of 3 runs of the viewer's tests). Every slider
+/// of the panel goes through here.
 fn with_stable_id<R>(ui: &mut egui::Ui, name: &str, add: impl FnOnce(&mut egui::Ui) -> R) -> R {
     ui.scope_builder(egui::UiBuilder::new().scope_id(egui::Id::unique(name)), add)
         .inner
@@ -79,13 +80,14 @@ fn param_widget(
         } else {
             slider
         };
-        let response = ui.add(slider).on_hover_text(format!(
-            "{}\nrange {} to {}{} ({tag})",
-            spec.doc,
-            spec.min,
-            spec.max,
-            if spec.integer { ", whole numbers" } else { "" }
-        ));
+        let response = with_stable_id(ui, &format!("parameter {}", spec.name), |ui| ui.add(slider))
+            .on_hover_text(format!(
+                "{}\nrange {} to {}{} ({tag})",
+                spec.doc,
+                spec.min,
+                spec.max,
+                if spec.integer { ", whole numbers" } else { "" }
+            ));
         ui.label(RichText::new(if spec.live { "live" } else { "restarts" }).weak())
             .on_hover_text(if spec.live {
                 "changes apply to the passes still to come"
@@ -368,8 +370,7 @@ fn render_section(
             (true, None) => "auto".to_string(),
             _ => format!("{v}"),
         });
-    let r = ui
-        .add(slider)
+    let r = with_stable_id(ui, "threads", |ui| ui.add(slider))
         .on_hover_text("worker threads, 0 for one per core (restarts)");
     if commit_value(&r, false) && threads != settings.threads {
         out.push(Command::SetThreads(threads));
@@ -400,9 +401,10 @@ fn render_section(
 fn display_section(ui: &mut egui::Ui, settings: &ViewerSettings, out: &mut Vec<Command>) {
     let mut exposure = settings.exposure;
     ui.horizontal(|ui| {
-        if ui
-            .add(egui::Slider::new(&mut exposure, -20.0..=20.0).text("exposure (EV)"))
-            .changed()
+        if with_stable_id(ui, "exposure", |ui| {
+            ui.add(egui::Slider::new(&mut exposure, -20.0..=20.0).text("exposure (EV)"))
+        })
+        .changed()
         {
             out.push(Command::SetExposure(exposure));
         }
