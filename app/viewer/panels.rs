@@ -44,8 +44,7 @@ fn commit_value(response: &egui::Response, live: bool) -> bool {
 /// and the panel's rows come and go (the lighting label, a loading row): a slider's id then
 /// changes for a frame, and a drag or an accessibility action aimed at it is lost or lands on
 /// its neighbour (measured: the environment's strength or rotation, in 11 of 12 runs of the
-/// panel's test run alone; the exposure, in 1 of 3 runs of the viewer's tests). Every slider
-/// of the panel goes through here.
+/// panel's test run alone). Every slider of the panel goes through here.
 fn with_stable_id<R>(ui: &mut egui::Ui, name: &str, add: impl FnOnce(&mut egui::Ui) -> R) -> R {
     ui.scope_builder(egui::UiBuilder::new().scope_id(egui::Id::unique(name)), add)
         .inner
