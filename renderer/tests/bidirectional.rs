@@ -8,7 +8,9 @@ use caustica_renderer::session::{Session, SessionConfig};
 use std::sync::Arc;
 
 use crate::common;
-use common::{assert_strategies_agree, mean, render, with_orthographic_camera};
+use common::{
+    assert_strategies_agree, block_means, mean, render, with_orthographic_camera, z_scores,
+};
 
 /// Every strategy on its own (unweighted) converges to the same image for each path length
 /// it can sample: on the Cornell box (diffuse, one area light) every strategy samples every
@@ -44,61 +46,6 @@ fn bdpt_reproduces_the_closed_forms() {
     }
 }
 
-/// Per-block means of the image (blocks of `block` x `block` pixels) with their standard
-/// errors, from the spread of the per-pass block means over `passes` independent passes.
-fn block_means(
-    integrator: &str,
-    desc: &SceneDescription,
-    passes: u64,
-    size: u32,
-    block: usize,
-    seed: u64,
-    params: &[(&str, f64)],
-) -> Vec<(f64, f64)> {
-    use caustica_renderer::camera::Camera;
-    use caustica_renderer::integrators::{RenderContext, find};
-    use std::sync::atomic::AtomicBool;
-    let scene = Arc::new(Scene::build(desc.clone()).unwrap());
-    let camera = Camera::new(&scene.camera, size, size);
-    let mut it = (find(integrator).unwrap().create)(
-        RenderContext {
-            scene,
-            camera,
-            seed,
-        },
-        &params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-    );
-    let cancel = AtomicBool::new(false);
-    let blocks_per_row = size as usize / block;
-    let nb = blocks_per_row * blocks_per_row;
-    let (mut sum, mut sum_sq) = (vec![0.0f64; nb], vec![0.0f64; nb]);
-    let mut previous = vec![0.0f64; nb];
-    let lum = |p: glam::Vec3| caustica_renderer::geometry::luminance(p) as f64;
-    for pass in 0..passes {
-        it.render_counted_pass(pass, &cancel).unwrap();
-        let img = it.image();
-        let mut totals = vec![0.0f64; nb];
-        for (i, p) in img.pixels.iter().enumerate() {
-            let (x, y) = (i % size as usize / block, i / size as usize / block);
-            totals[y * blocks_per_row + x] += lum(*p) * (pass + 1) as f64 / (block * block) as f64;
-        }
-        for b in 0..nb {
-            let this_pass = totals[b] - previous[b];
-            sum[b] += this_pass;
-            sum_sq[b] += this_pass * this_pass;
-        }
-        previous.copy_from_slice(&totals);
-    }
-    let n = passes as f64;
-    (0..nb)
-        .map(|b| {
-            let m = sum[b] / n;
-            let var = (sum_sq[b] / n - m * m).max(0.0) * n / (n - 1.0);
-            (m, (var / n).sqrt())
-        })
-        .collect()
-}
-
 /// Agreement of two integrators block by block: the z-scores of the differences of block
 /// means, and the ratio of the image means (b over a).
 fn agreement(
@@ -109,17 +56,10 @@ fn agreement(
 ) -> (Vec<f64>, f64) {
     // Different seeds: the same seed gives both integrators the same first random numbers
     // in every pixel, and common random numbers would correlate them.
-    let (ma, mb) = (
-        block_means(a.0, desc, a.1, size, 4, 1, &[]),
-        block_means(b.0, desc, b.1, size, 4, 2, &[]),
-    );
-    let z = ma
-        .iter()
-        .zip(&mb)
-        .map(|((x, sx), (y, sy))| (x - y) / (sx * sx + sy * sy).sqrt().max(1e-12))
-        .collect();
-    let total = |m: &[(f64, f64)]| m.iter().map(|v| v.0).sum::<f64>();
-    (z, total(&mb) / total(&ma))
+    z_scores(
+        &block_means(a.0, desc, a.1, size, 4, 1, &[]),
+        &block_means(b.0, desc, b.1, size, 4, 2, &[]),
+    )
 }
 
 /// pt and bdpt agree on the bundled Cornell boxes: mean luminance within 1 percent and
@@ -299,14 +239,8 @@ fn mmlt_agrees_with_the_path_tracer_on_the_cornell_boxes() {
     ] {
         let pt = block_means("pt", &desc, 1024, 32, 4, 1, &[("max_depth", 10.0)]);
         let mmlt = block_means_over_seeds("mmlt", &desc, &mmlt_params(&[]), 512, 32, 1..7);
-        let z: Vec<f64> = pt
-            .iter()
-            .zip(&mmlt)
-            .map(|((x, sx), (y, sy))| (x - y) / (sx * sx + sy * sy).sqrt().max(1e-12))
-            .collect();
+        let (z, ratio) = z_scores(&pt, &mmlt);
         let chi = z.iter().map(|z| z * z).sum::<f64>() / z.len() as f64;
-        let total = |m: &[(f64, f64)]| m.iter().map(|v| v.0).sum::<f64>();
-        let ratio = total(&mmlt) / total(&pt);
         eprintln!("{name}: mmlt / pt luminance {ratio:.4}, mean z^2 {chi:.3}");
         assert!(
             (ratio - 1.0).abs() < 0.01,

@@ -15,3 +15,4 @@ mod lights;
 mod loader;
 mod photon_mapping;
 mod session;
+mod vertex_merging;

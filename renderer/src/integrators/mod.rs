@@ -13,6 +13,7 @@ pub mod pixel_pass;
 pub mod ppm;
 pub mod registry;
 mod scatter;
+pub mod vcm;
 
 pub use params::{
     ParamSpec, ParamValues, check_live_change, check_param, param_value, params_json,

@@ -1,7 +1,7 @@
 //! The integrators Caustica offers, each with its name, description and parameters: the
 //! command line, the viewer and the EXR header all read this one list.
 
-use super::{Integrator, ParamSpec, ParamValues, RenderContext, bdpt, mmlt, path_tracer, ppm};
+use super::{Integrator, ParamSpec, ParamValues, RenderContext, bdpt, mmlt, path_tracer, ppm, vcm};
 
 pub struct IntegratorInfo {
     pub name: &'static str,
@@ -73,6 +73,14 @@ static REGISTRY: &[IntegratorInfo] = &[
         params: ppm::PhotonMappingSettings::PARAMS,
         create: ppm::create_pppm,
         bytes_per_pixel: 700,
+    },
+    IntegratorInfo {
+        name: "vcm",
+        title: "Vertex connection and merging",
+        description: "Georgiev et al. 2012: bidirectional connections and photon merges in one estimator, one MIS.",
+        params: vcm::VcmSettings::PARAMS,
+        create: vcm::create,
+        bytes_per_pixel: 2000,
     },
 ];
 

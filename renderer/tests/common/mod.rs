@@ -41,6 +41,83 @@ pub fn render(
     ((*frame.image).clone(), frame.dropped)
 }
 
+/// Per-block means of the image (blocks of `block` x `block` pixels) with their standard
+/// errors, from the spread of the per-pass block means over `passes` independent passes.
+pub fn block_means(
+    integrator: &str,
+    desc: &SceneDescription,
+    passes: u64,
+    size: u32,
+    block: usize,
+    seed: u64,
+    params: &[(&str, f64)],
+) -> Vec<(f64, f64)> {
+    use caustica_renderer::camera::Camera;
+    use caustica_renderer::integrators::{RenderContext, find};
+    let scene = Arc::new(Scene::build(desc.clone()).unwrap());
+    let camera = Camera::new(&scene.camera, size, size);
+    let mut it = (find(integrator).unwrap().create)(
+        RenderContext {
+            scene,
+            camera,
+            seed,
+        },
+        &params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+    );
+    block_means_of(&mut *it, passes, size, block)
+}
+
+/// `block_means` of an integrator already made (square images of `size` pixels).
+pub fn block_means_of(
+    it: &mut dyn caustica_renderer::integrators::Integrator,
+    passes: u64,
+    size: u32,
+    block: usize,
+) -> Vec<(f64, f64)> {
+    use std::sync::atomic::AtomicBool;
+    let cancel = AtomicBool::new(false);
+    let blocks_per_row = size as usize / block;
+    let nb = blocks_per_row * blocks_per_row;
+    let (mut sum, mut sum_sq) = (vec![0.0f64; nb], vec![0.0f64; nb]);
+    let mut previous = vec![0.0f64; nb];
+    let lum = |p: glam::Vec3| caustica_renderer::geometry::luminance(p) as f64;
+    for pass in 0..passes {
+        it.render_counted_pass(pass, &cancel).unwrap();
+        let img = it.image();
+        let mut totals = vec![0.0f64; nb];
+        for (i, p) in img.pixels.iter().enumerate() {
+            let (x, y) = (i % size as usize / block, i / size as usize / block);
+            totals[y * blocks_per_row + x] += lum(*p) * (pass + 1) as f64 / (block * block) as f64;
+        }
+        for b in 0..nb {
+            let this_pass = totals[b] - previous[b];
+            sum[b] += this_pass;
+            sum_sq[b] += this_pass * this_pass;
+        }
+        previous.copy_from_slice(&totals);
+    }
+    let n = passes as f64;
+    (0..nb)
+        .map(|b| {
+            let m = sum[b] / n;
+            let var = (sum_sq[b] / n - m * m).max(0.0) * n / (n - 1.0);
+            (m, (var / n).sqrt())
+        })
+        .collect()
+}
+
+/// The z-scores of the differences of two sets of block means (with standard errors), and
+/// the ratio of their totals (b over a).
+pub fn z_scores(a: &[(f64, f64)], b: &[(f64, f64)]) -> (Vec<f64>, f64) {
+    let z = a
+        .iter()
+        .zip(b)
+        .map(|((x, sx), (y, sy))| (x - y) / (sx * sx + sy * sy).sqrt().max(1e-12))
+        .collect();
+    let total = |m: &[(f64, f64)]| m.iter().map(|v| v.0).sum::<f64>();
+    (z, total(b) / total(a))
+}
+
 /// The mean over pixels of the mean over channels.
 pub fn mean(img: &Image) -> f64 {
     img.pixels

@@ -135,7 +135,7 @@ pub fn connect(
 }
 
 /// G without visibility: |cos| |cos| / distance^2 (shading normals, as the BSDFs use them).
-fn geometry_term(a: &Vertex, b: &Vertex) -> f32 {
+pub(crate) fn geometry_term(a: &Vertex, b: &Vertex) -> f32 {
     let d = a.p - b.p;
     let dist_sq = d.length_squared();
     if !(dist_sq > 0.0) {
@@ -153,7 +153,7 @@ fn geometry_term(a: &Vertex, b: &Vertex) -> f32 {
 }
 
 /// Nothing between two vertices (each ray end kept off its own surface).
-fn visible(scene: &Scene, a: &Vertex, b: &Vertex, rays: &mut u64) -> bool {
+pub(crate) fn visible(scene: &Scene, a: &Vertex, b: &Vertex, rays: &mut u64) -> bool {
     let o = a.ray_origin_towards(b.p);
     let target = b.ray_origin_towards(a.p);
     let d = target - o;

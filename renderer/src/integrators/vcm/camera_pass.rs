@@ -1,0 +1,299 @@
+//! The camera half of a VCM pass (Georgiev et al. 2012, section 5): one camera subpath per
+//! pixel; at each vertex emission found (s = 0), next-event estimation (s = 1), connections
+//! to every vertex of the pixel's own light subpath, and merges with the light vertices of
+//! every subpath within the pass's radius, each weighted by `mis`.
+
+use super::light_pass::LightVertex;
+use super::mis::{
+    SubpathMis, weight_connection, weight_emission_hit, weight_merge, weight_next_event,
+};
+use super::{Pass, light_densities};
+use crate::film::sanitize;
+use crate::integrators::PassStats;
+use crate::integrators::bdpt::connect::{geometry_term, visible};
+use crate::integrators::bdpt::vertex::Vertex;
+use crate::integrators::scatter;
+use crate::material::TransportMode;
+use crate::sampling::sampler::SampleSource;
+use glam::{Vec2, Vec3};
+
+/// The value of one camera subpath through film position `film`, whose pixel's light subpath
+/// is `own_light_path`.
+pub(super) fn trace_camera_subpath(
+    pass: &Pass,
+    film: Vec2,
+    own_light_path: &[LightVertex],
+    sampler: &mut impl SampleSource,
+    stats: &mut PassStats,
+) -> Vec3 {
+    let (scene, camera, w) = (pass.scene, pass.camera, &pass.weights);
+    let mut ray = camera.generate_ray(film);
+    let mut beta = Vec3::ONE;
+    let mut mis = SubpathMis::default();
+    let mut path_length = 1u32;
+    // Every scattering so far was specular: what merging alone cannot see.
+    let mut specular_path = true;
+    let mut eta_scale = 1.0f32;
+    let mut l = Vec3::ZERO;
+    loop {
+        stats.rays += 1;
+        let Some(si) = scene.intersect(&ray) else {
+            if let Some(env) = scene.environment {
+                let le = scene.environment_radiance(ray.d);
+                if le != Vec3::ZERO {
+                    let weight = emission_weight(pass, &mis, path_length, specular_path, || {
+                        light_densities::emitter_hit(scene, env, -ray.d)
+                    });
+                    add(&mut l, beta * le * weight, stats);
+                }
+            }
+            break;
+        };
+        beta *= si.transmittance;
+        if path_length == 1 {
+            let pdf = camera.pdf_first_hit(ray.o, si.p, Some(si.n));
+            if !(pdf > 0.0) {
+                break;
+            }
+            mis = SubpathMis::camera_first_hit(w, pdf);
+        } else {
+            mis.arrive(w, Some((si.p - ray.o).length_squared()), si.n.dot(ray.d));
+        }
+        if let Some((index, area)) = scene.area_light(&si) {
+            let le = area.l(&scene.textures, &si.uv, si.wo);
+            if le != Vec3::ZERO {
+                let weight = emission_weight(pass, &mis, path_length, specular_path, || {
+                    light_densities::emitter_hit(scene, index, si.wo)
+                });
+                add(&mut l, beta * le * weight, stats);
+            }
+        }
+        if path_length >= pass.max_path_length {
+            break;
+        }
+        let bsdf = scene.bsdf(&si);
+        let wo = si.shading.to_local(si.wo);
+        if !bsdf.is_delta() {
+            let x = Vertex::surface(si, bsdf, beta);
+            let camera_vertex = CameraVertex {
+                vertex: &x,
+                mis: &mis,
+                path_length,
+            };
+            if pass.connections {
+                if path_length < pass.max_path_length {
+                    add(
+                        &mut l,
+                        next_event(pass, &camera_vertex, sampler, stats),
+                        stats,
+                    );
+                }
+                for y in own_light_path {
+                    if y.path_length + 1 + path_length > pass.max_path_length {
+                        break;
+                    }
+                    add(&mut l, connect(pass, &camera_vertex, y, stats), stats);
+                }
+            }
+            if pass.merges {
+                add(&mut l, merge(pass, &camera_vertex), stats);
+            }
+        }
+        let Some(next) = scatter(&si, &bsdf, wo, sampler, TransportMode::Radiance) else {
+            break;
+        };
+        let delta = next.sample.is_delta;
+        let rev_pdf = if delta {
+            next.sample.pdf
+        } else {
+            bsdf.pdf(next.sample.wi, wo)
+        };
+        mis.scatter(w, next.sample.pdf, rev_pdf, si.n.dot(next.ray.d), delta);
+        specular_path &= delta;
+        beta *= next.weight;
+        if next.sample.eta != 1.0 {
+            eta_scale *= next.sample.eta * next.sample.eta;
+        }
+        if !beta.is_finite() || beta == Vec3::ZERO {
+            break;
+        }
+        // Roulette as bdpt's camera subpaths: from the third vertex, on the throughput with
+        // refraction's 1/eta^2 factored out.
+        if path_length >= 2 {
+            let survive = (beta.max_element() * eta_scale).min(1.0);
+            if !(sampler.get_1d() < survive) {
+                break;
+            }
+            beta /= survive;
+        }
+        ray = next.ray;
+        path_length += 1;
+    }
+    l
+}
+
+/// Adds a technique's weighted value to the pixel's, or counts it dropped.
+fn add(l: &mut Vec3, v: Vec3, stats: &mut PassStats) {
+    match sanitize(v) {
+        Some(v) => *l += v,
+        None => stats.dropped += 1,
+    }
+}
+
+/// A non-specular vertex of a camera subpath, with what its techniques need.
+struct CameraVertex<'a> {
+    vertex: &'a Vertex,
+    mis: &'a SubpathMis,
+    path_length: u32,
+}
+
+/// Weight of emission a camera subpath found: alone on the first edge; with merges only, all
+/// or nothing (what a specular chain sees of a light no merge can reach, and nothing else);
+/// otherwise MIS against every other technique (`densities` gives next-event estimation's
+/// and emission's densities of the light point).
+fn emission_weight(
+    pass: &Pass,
+    mis: &SubpathMis,
+    path_length: u32,
+    specular_path: bool,
+    densities: impl FnOnce() -> (f32, f32),
+) -> f32 {
+    if path_length == 1 {
+        return 1.0;
+    }
+    if !pass.connections {
+        return if specular_path { 1.0 } else { 0.0 };
+    }
+    let (direct_pdf_a, emission_pdf_w) = densities();
+    weight_emission_hit(&pass.weights, mis, direct_pdf_a, emission_pdf_w)
+}
+
+/// Next-event estimation (s = 1) from a camera vertex.
+fn next_event(
+    pass: &Pass,
+    x: &CameraVertex,
+    sampler: &mut impl SampleSource,
+    stats: &mut PassStats,
+) -> Vec3 {
+    let scene = pass.scene;
+    let v = x.vertex;
+    let (Some(si), Some(bsdf)) = (&v.si, &v.bsdf) else {
+        return Vec3::ZERO;
+    };
+    let (ul, u) = (sampler.get_1d(), sampler.get_2d());
+    let Some((index, pmf, ls)) = scene.sample_light(si, ul, u) else {
+        return Vec3::ZERO;
+    };
+    let wo = si.shading.to_local(si.wo);
+    let wi = si.shading.to_local(ls.wi);
+    let f = bsdf.f(wo, wi, TransportMode::Radiance) * wi.z.abs();
+    if f == Vec3::ZERO || !si.consistent(wo, wi, ls.wi) {
+        return Vec3::ZERO;
+    }
+    let (direct_pdf_w, emission_pdf_w, cos_at_light) =
+        light_densities::next_event(scene, index, pmf, &ls);
+    let bsdf_pdf = if ls.is_delta { 0.0 } else { bsdf.pdf(wo, wi) };
+    let weight = weight_next_event(
+        &pass.weights,
+        x.mis,
+        bsdf_pdf,
+        bsdf.pdf(wi, wo),
+        direct_pdf_w,
+        emission_pdf_w,
+        si.n.dot(ls.wi).abs(),
+        cos_at_light,
+    );
+    stats.rays += 1;
+    let shadow = if ls.dist.is_finite() {
+        si.spawn_ray_to(ls.p_light)
+    } else {
+        si.spawn_ray(ls.wi)
+    };
+    if scene.occluded(&shadow) {
+        return Vec3::ZERO;
+    }
+    v.beta * f * ls.l * (weight / (pmf * ls.pdf))
+}
+
+/// A connection of camera vertex `x` with light vertex `y` of the pixel's own light subpath.
+fn connect(pass: &Pass, x: &CameraVertex, y: &LightVertex, stats: &mut PassStats) -> Vec3 {
+    let (xv, yv) = (x.vertex, &y.vertex);
+    let (Some(xs), Some(xb), Some(ys), Some(yb)) = (&xv.si, &xv.bsdf, &yv.si, &yv.bsdf) else {
+        return Vec3::ZERO;
+    };
+    let l =
+        xv.beta * xv.f(yv, TransportMode::Radiance) * yv.f(xv, TransportMode::Importance) * yv.beta;
+    if l == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let g = geometry_term(xv, yv);
+    let d = yv.p - xv.p;
+    let dist_sq = d.length_squared();
+    if g == 0.0 || !(dist_sq > 0.0) {
+        return Vec3::ZERO;
+    }
+    let dir = d / dist_sq.sqrt();
+    let (x_wo, x_wi) = (xs.shading.to_local(xs.wo), xs.shading.to_local(dir));
+    let (y_wo, y_wi) = (ys.shading.to_local(ys.wo), ys.shading.to_local(-dir));
+    let camera_pdf_a = xb.pdf(x_wo, x_wi) * yv.ng.dot(dir).abs() / dist_sq;
+    let light_pdf_a = yb.pdf(y_wo, y_wi) * xv.ng.dot(dir).abs() / dist_sq;
+    let weight = weight_connection(
+        &pass.weights,
+        &y.mis,
+        x.mis,
+        (camera_pdf_a, xb.pdf(x_wi, x_wo)),
+        (light_pdf_a, yb.pdf(y_wi, y_wo)),
+    );
+    if !visible(pass.scene, xv, yv, &mut stats.rays) {
+        return Vec3::ZERO;
+    }
+    l * (g * weight)
+}
+
+/// Merges camera vertex `x` with every light vertex within the pass's radius (a photon
+/// density estimate over the disc, weighted per light vertex).
+fn merge(pass: &Pass, x: &CameraVertex) -> Vec3 {
+    let Some(grid) = pass.grid else {
+        return Vec3::ZERO;
+    };
+    let v = x.vertex;
+    let (Some(si), Some(bsdf)) = (&v.si, &v.bsdf) else {
+        return Vec3::ZERO;
+    };
+    let wo = si.shading.to_local(si.wo);
+    let facing = if si.n.dot(si.wo) >= 0.0 { si.n } else { -si.n };
+    let mut sum = Vec3::ZERO;
+    for &c in grid.candidates(si.p) {
+        let y = &pass.light_vertices[c as usize];
+        if y.path_length + x.path_length > pass.max_path_length
+            || (y.vertex.p - si.p).length_squared() > pass.radius_sq
+        {
+            continue;
+        }
+        let Some(ys) = &y.vertex.si else {
+            continue;
+        };
+        // The light arrived along ys.wo; from behind this surface it cannot be reflected here.
+        let wi = ys.wo;
+        if wi.dot(facing) <= 0.0 {
+            continue;
+        }
+        let wi_local = si.shading.to_local(wi);
+        let f = bsdf.f(wo, wi_local, TransportMode::Radiance);
+        if f == Vec3::ZERO {
+            continue;
+        }
+        // Photon density is flux per area of the surface it landed on; the ratio of cosines
+        // is as the photon mappers' (`HitPoint::response`).
+        let cos_ratio = wi_local.z.abs() / wi.dot(ys.n).abs();
+        let weight = weight_merge(
+            &pass.weights,
+            &y.mis,
+            x.mis,
+            bsdf.pdf(wo, wi_local),
+            bsdf.pdf(wi_local, wo),
+        );
+        sum += f * y.vertex.beta * (cos_ratio * weight);
+    }
+    v.beta * sum * pass.merge_normalization
+}

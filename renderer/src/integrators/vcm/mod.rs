@@ -1,0 +1,295 @@
+//! Vertex connection and merging (Georgiev, Křivánek, Davidovič & Slusallek 2012; the same
+//! estimator as Hachisuka, Pantaleoni & Jensen 2012's unified path sampling): bidirectional
+//! path tracing's connections and photon mapping's merges as techniques of one estimator,
+//! weighted by one MIS (`mis.rs`, Georgiev's recursive quantities).
+//!
+//! Each pass: one light subpath per pixel (`light_pass.rs`), its non-specular vertices stored
+//! and indexed in the photon mappers' hash grid, each also joined to the camera (t = 1); then
+//! one camera subpath per pixel (`camera_pass.rs`) that at each non-specular vertex uses
+//! next-event estimation, connects to every vertex of its pixel's light subpath and merges
+//! with the light vertices of all subpaths within the pass's radius. The radius shrinks pass
+//! by pass as r_i = r_0 (i + 1)^((alpha - 1) / 2) (Knaus & Zwicker 2011's rate, in SmallVCM's
+//! form), kept as a running product so that alpha can change while rendering; every pass is
+//! an estimate of each pixel with the pass's radius, and the image is their mean.
+
+mod camera_pass;
+pub mod light_densities;
+mod light_pass;
+pub mod mis;
+
+use crate::camera::Camera;
+use crate::error_estimate::ErrorEstimate;
+use crate::film::Film;
+use crate::image::Image;
+use crate::integrators::pixel_pass::{Row, pixel_pass};
+use crate::integrators::ppm::auto_radius;
+use crate::integrators::ppm::hash_grid::HashGrid;
+use crate::integrators::{
+    Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PlotKind, PlotSeries, RenderContext,
+    params,
+};
+use crate::scene::Scene;
+use glam::{Vec2, Vec3};
+use light_pass::LightVertex;
+use mis::MisWeights;
+use std::sync::atomic::AtomicBool;
+
+/// Which techniques a run uses: both in `vcm`; one alone for tests (connections alone are
+/// bdpt, merges alone a bidirectional photon mapper).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Techniques {
+    pub connections: bool,
+    pub merges: bool,
+}
+
+impl Default for Techniques {
+    fn default() -> Self {
+        Techniques {
+            connections: true,
+            merges: true,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+pub struct VcmSettings {
+    pub alpha: f64,
+    /// Initial merge radius in scene units; 0 chooses it as the photon mappers do.
+    pub radius: f64,
+    pub max_depth: u32,
+    #[serde(skip)]
+    pub techniques: Techniques,
+}
+
+impl VcmSettings {
+    pub const PARAMS: &'static [ParamSpec] = &[
+        ParamSpec::new(
+            "alpha",
+            "Radius reduction (0, 1]: the merge radius shrinks as pass^((alpha - 1) / 2); smaller shrinks faster (less bias, noisier merges), 1 keeps it.",
+            0.75,
+            (1e-3, 1.0),
+        )
+        .live(),
+        ParamSpec::new(
+            "radius",
+            "Initial merge radius in scene units; 0 picks four pixel footprints at the median distance of the surfaces the camera sees.",
+            0.0,
+            (0.0, 1e6),
+        )
+        .automatic_at_zero(),
+        params::MAX_DEPTH,
+    ];
+
+    pub fn from_params(p: &ParamValues) -> Self {
+        params::read_settings(Self::PARAMS, p)
+    }
+}
+
+pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
+    Box::new(Vcm::new(ctx, VcmSettings::from_params(params)))
+}
+
+const MAX_HISTORY: usize = 2048;
+
+/// What the two halves of a pass share.
+pub(crate) struct Pass<'a> {
+    scene: &'a Scene,
+    camera: &'a Camera,
+    weights: MisWeights,
+    /// Most edges of a path: max_depth + 1.
+    max_path_length: u32,
+    connections: bool,
+    merges: bool,
+    radius_sq: f32,
+    /// 1 / (pi r^2 N_L): a merge is a density estimate over the disc among N_L subpaths.
+    merge_normalization: f32,
+    light_vertices: &'a [LightVertex],
+    grid: Option<&'a HashGrid>,
+}
+
+pub struct Vcm {
+    ctx: RenderContext,
+    settings: VcmSettings,
+    film: Film,
+    pass_buffer: Vec<Vec3>,
+    initial_radius: f64,
+    radius_sq: f64,
+    radius_floor_sq: f64,
+    passes: u64,
+    /// Bytes of the last pass's light vertices and grid (they live only during a pass).
+    pass_bytes: usize,
+    /// (passes, radius), thinned to stay bounded.
+    radius_history: Vec<[f64; 2]>,
+    history_stride: u64,
+}
+
+impl Vcm {
+    pub fn new(ctx: RenderContext, settings: VcmSettings) -> Self {
+        let (w, h) = (ctx.camera.width as usize, ctx.camera.height as usize);
+        let initial_radius = if settings.radius > 0.0 {
+            settings.radius
+        } else {
+            auto_radius(&ctx)
+        };
+        let diagonal = ctx.scene.bounds.diagonal().length().max(1e-12) as f64;
+        Vcm {
+            settings,
+            film: Film::new(w, h),
+            pass_buffer: vec![Vec3::ZERO; w * h],
+            initial_radius,
+            radius_sq: initial_radius * initial_radius,
+            // As the photon mappers: f32 positions resolve no less than a millionth of the
+            // scene.
+            radius_floor_sq: (1e-6 * diagonal).powi(2),
+            passes: 0,
+            pass_bytes: 0,
+            radius_history: Vec::new(),
+            history_stride: 1,
+            ctx,
+        }
+    }
+
+    /// The merge radius the next pass uses.
+    pub fn radius(&self) -> f64 {
+        self.radius_sq.sqrt()
+    }
+
+    pub fn initial_radius(&self) -> f64 {
+        self.initial_radius
+    }
+
+    fn record_radius(&mut self) {
+        if !self.passes.is_multiple_of(self.history_stride) {
+            return;
+        }
+        self.radius_history
+            .push([self.passes as f64, self.radius_sq.sqrt()]);
+        if self.radius_history.len() > MAX_HISTORY {
+            self.radius_history = self.radius_history.iter().copied().step_by(2).collect();
+            self.history_stride *= 2;
+        }
+    }
+}
+
+impl Integrator for Vcm {
+    fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
+        let (scene, camera) = (&*self.ctx.scene, &self.ctx.camera);
+        let pixels = (camera.width * camera.height) as usize;
+        let (width, height) = (camera.width as usize, camera.height as usize);
+        let techniques = self.settings.techniques;
+        let radius_sq = self.radius_sq as f32;
+        let light_paths = pixels as f32;
+        let weights = MisWeights::new(
+            1.0,
+            radius_sq.sqrt(),
+            light_paths,
+            pixels as f32,
+            techniques.connections,
+            techniques.merges,
+        );
+        let mut setup = Pass {
+            scene,
+            camera,
+            weights,
+            max_path_length: self.settings.max_depth + 1,
+            connections: techniques.connections,
+            merges: techniques.merges,
+            radius_sq,
+            merge_normalization: 1.0 / (std::f32::consts::PI * radius_sq * light_paths),
+            light_vertices: &[],
+            grid: None,
+        };
+        let mut stats = PassStats::default();
+        let light_pass::LightPaths {
+            vertices,
+            ends,
+            splats,
+        } = light_pass::light_pass(&setup, self.ctx.seed, pass, cancel, &mut stats)?;
+        let grid = techniques.merges.then(|| {
+            let points: Vec<Option<(Vec3, f32)>> = vertices
+                .iter()
+                .map(|v| Some((v.vertex.p, radius_sq.sqrt())))
+                .collect();
+            HashGrid::build(&points)
+        });
+        setup.light_vertices = &vertices;
+        setup.grid = grid.as_ref();
+        let setup = &setup;
+        let ends = &ends;
+        stats = stats
+            + pixel_pass(
+                &mut self.pass_buffer,
+                width,
+                self.ctx.seed,
+                pass,
+                cancel,
+                |film: Vec2, row: &mut Row<()>| {
+                    // The jitter can round a film position up to the next pixel's edge.
+                    let (x, y) = (film.x as usize, film.y as usize);
+                    let pixel = y.min(height - 1) * width + x.min(width - 1);
+                    let start = if pixel == 0 { 0 } else { ends[pixel - 1] } as usize;
+                    let own = &setup.light_vertices[start..ends[pixel] as usize];
+                    row.stats.samples += 1;
+                    camera_pass::trace_camera_subpath(
+                        setup,
+                        film,
+                        own,
+                        &mut row.sampler,
+                        &mut row.stats,
+                    )
+                },
+            )?;
+        for (i, v) in splats {
+            self.pass_buffer[i] += v;
+        }
+        self.film.add_pass(&self.pass_buffer);
+        self.pass_bytes = std::mem::size_of_val(vertices.as_slice())
+            + std::mem::size_of_val(ends.as_slice())
+            + grid.as_ref().map_or(0, |g| g.memory_bytes());
+        // The next pass's radius: r_{i+1}^2 = r_i^2 ((i + 1) / (i + 2))^(1 - alpha).
+        let i = self.passes as f64;
+        self.radius_sq = (self.radius_sq * ((i + 1.0) / (i + 2.0)).powf(1.0 - self.settings.alpha))
+            .max(self.radius_floor_sq);
+        self.passes += 1;
+        self.record_radius();
+        Ok(stats)
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.film.memory_bytes()
+            + std::mem::size_of_val(self.pass_buffer.as_slice())
+            + std::mem::size_of_val(self.radius_history.as_slice())
+            + self.pass_bytes
+    }
+
+    fn image(&self) -> Image {
+        self.film.image()
+    }
+
+    fn error_estimate(&self) -> Option<ErrorEstimate> {
+        self.film.error_estimate()
+    }
+
+    fn automatic(&self) -> Vec<(&'static str, f64)> {
+        vec![("radius", self.initial_radius)]
+    }
+
+    fn set_live_param(&mut self, name: &str, value: f64) {
+        match name {
+            "alpha" => self.settings.alpha = value,
+            _ => debug_assert!(false, "{name} is not live"),
+        }
+    }
+
+    fn plots(&self) -> Vec<PlotSeries> {
+        vec![PlotSeries {
+            plot: "Radius".into(),
+            name: "merge radius".into(),
+            kind: PlotKind::Line,
+            x_label: "passes".into(),
+            y_label: "radius".into(),
+            points: self.radius_history.clone(),
+            point_names: Vec::new(),
+        }]
+    }
+}
