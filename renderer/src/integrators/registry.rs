@@ -80,7 +80,7 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Georgiev et al. 2012: bidirectional connections and photon merges in one estimator, one MIS.",
         params: vcm::VcmSettings::PARAMS,
         create: vcm::create,
-        bytes_per_pixel: 2000,
+        bytes_per_pixel: 1000,
     },
 ];
 
