@@ -227,8 +227,9 @@ fn on_the_uniform_closed_form_every_estimate_tracks_the_true_error() {
         pixels: vec![glam::Vec3::ONE; 24 * 24],
     };
     let photons = [("radius", 0.1), ("photons", 10_000.0)];
-    let runs: [(&str, common::Params, &[u64]); 6] = [
+    let runs: [(&str, common::Params, &[u64]); 7] = [
         ("pt", &[], &[2, 8, 32, 128, 512]),
+        ("vcm", &[], &[2, 8, 32, 128]),
         ("bdpt", &[], &[2, 8, 32, 128]),
         ("mmlt", &[("bootstrap", 10_000.0)], &[4, 16, 64, 256]),
         ("sppm", &photons, &[2, 8, 32, 128]),
@@ -244,16 +245,18 @@ fn on_the_uniform_closed_form_every_estimate_tracks_the_true_error() {
 /// The mirrored point light (see `common`): the photon-carried radiance has curvature, and
 /// with a first radius of 2.25 (the view is 0.1 wide) the kernel bias is most of the error
 /// and falls slowly; the reference is exact. Only photons carry the light through the mirror,
-/// so only the photon mappers render it.
+/// so only the photon mappers and vcm's merges render it.
 #[test]
 fn on_the_mirrored_light_the_photon_mappers_estimate_their_kernel_bias() {
     let setup = MirroredLight::new();
     let scene = scene(setup.desc.clone());
     let camera = Camera::new(&scene.camera, 16, 16);
     let reference = setup.reference_image(&camera, 4);
-    let params = [("radius", 2.25), ("photons", 40_000.0), ("max_depth", 2.0)];
-    for integrator in ["sppm", "pppm", "ppm"] {
-        let c = track(&scene, integrator, &params, &[4, 16, 64, 128], &reference);
+    let photons = [("radius", 2.25), ("photons", 40_000.0), ("max_depth", 2.0)];
+    let vcm = [("radius", 2.25), ("max_depth", 2.0)];
+    for integrator in ["sppm", "pppm", "ppm", "vcm"] {
+        let params: common::Params = if integrator == "vcm" { &vcm } else { &photons };
+        let c = track(&scene, integrator, params, &[4, 16, 64, 128], &reference);
         check("mirrored light", integrator, &c);
         // It is the bias the estimate must see: without its bias part it would be too low.
         let last = c.last().unwrap();
@@ -272,8 +275,9 @@ fn on_cornell_glass_every_estimate_tracks_the_true_error() {
     let (reference, reference_error) = reference_by(&scene, "pt", &[], (40, 40), 4096);
     eprintln!("cornell-glass reference: estimated relMSE {reference_error:.2e}");
     let photons = [("photons", 20_000.0)];
-    let runs: [Run; 6] = [
+    let runs: [Run; 7] = [
         ("pt", &[], &[4, 16, 64, 256]),
+        ("vcm", &[], &[4, 16, 32]),
         ("bdpt", &[], &[4, 16, 64]),
         ("mmlt", &[("bootstrap", 10_000.0)], &[4, 16, 64]),
         ("sppm", &photons, &[8, 16, 64]),
@@ -294,8 +298,9 @@ fn on_the_door_every_estimate_tracks_the_true_error() {
     let (reference, reference_error) = reference_by(&scene, "bdpt", &depth, (32, 32), 2048);
     eprintln!("door reference: estimated relMSE {reference_error:.2e}");
     let photons = [("max_depth", 10.0), ("photons", 20_000.0)];
-    let runs: [Run; 6] = [
+    let runs: [Run; 7] = [
         ("pt", &depth, &[16, 64, 256]),
+        ("vcm", &depth, &[16, 64]),
         ("bdpt", &depth, &[4, 16, 64]),
         (
             "mmlt",
@@ -317,8 +322,9 @@ fn on_the_caustic_pool_every_estimate_tracks_the_true_error() {
     let (reference, reference_error) = shipped_reference("caustic-pool");
     eprintln!("caustic-pool reference: estimated relMSE {reference_error:.2e}");
     let photons = [("photons", 20_000.0)];
-    let runs: [Run; 6] = [
+    let runs: [Run; 7] = [
         ("pt", &[], &[16, 64, 256]),
+        ("vcm", &[], &[8, 16, 64]),
         ("bdpt", &[], &[4, 16, 64]),
         ("mmlt", &[("bootstrap", 30_000.0)], &[16, 64]),
         ("sppm", &photons, &[8, 16, 64]),

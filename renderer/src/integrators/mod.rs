@@ -6,6 +6,7 @@
 //! (DESIGN.md section 7).
 
 pub mod bdpt;
+pub mod kernel_bias;
 pub mod mmlt;
 pub mod params;
 pub mod path_tracer;

@@ -31,6 +31,7 @@ use crate::error_estimate::ErrorEstimate;
 use crate::film::sanitize;
 use crate::geometry::luminance;
 use crate::image::Image;
+use crate::integrators::kernel_bias::{self, INNER_RADIUS_RATIO};
 use crate::integrators::scatter;
 use crate::integrators::{
     Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PixelLayer, PlotKind, PlotSeries,
@@ -188,10 +189,6 @@ const PHOTON_STREAM: u64 = 0x005e_ed0f_9407_0715;
 /// (keyed by pixel and pass too) is independent of the jitter and the specular choices.
 const EYE_STREAM: u64 = 0x0e7e_0a7b_5eed_0001;
 const MAX_HISTORY: usize = 2048;
-/// The inner disc of the bias estimate, as a fraction of the gather radius (module docs).
-const INNER_RADIUS_RATIO: f64 = 0.5;
-/// c in b = c (L_R - L_{R/2}): the geometric mean of 4/3 (smooth radiance) and 2.08 (a step).
-const BIAS_FACTOR: f64 = 1.665;
 
 impl PhotonMapper {
     pub fn new(ctx: RenderContext, variant: Variant, settings: PhotonMappingSettings) -> Self {
@@ -549,15 +546,8 @@ impl Integrator for PhotonMapper {
             let area = std::f64::consts::PI * radius_sq * photons as f64;
             let indirect = gathered.tau[i] / area;
             let estimate = direct[i].as_dvec3() + indirect;
-            let inner_area = INNER_RADIUS_RATIO * INNER_RADIUS_RATIO * area;
-            let bias = BIAS_FACTOR * (indirect - gathered.tau_inner[i] / inner_area);
-            px.estimate_sum += estimate;
-            px.estimate_sum_sq += estimate * estimate;
-            if pass % 2 == 1 {
-                px.odd_estimate_sum += estimate;
-            }
-            px.bias_sum += bias;
-            px.bias_sum_sq += bias * bias;
+            let bias = kernel_bias::pass_bias(gathered.tau[i], gathered.tau_inner[i], area);
+            px.passes.add(pass, estimate, bias);
             px.direct_sum += direct[i].as_dvec3();
             if global_radius_sq.is_some() {
                 px.photons_counted += u64::from(gathered.m[i]);
@@ -584,7 +574,7 @@ impl Integrator for PhotonMapper {
             .map(|i| {
                 let l = match self.radii {
                     // Knaus & Zwicker 2011: the mean of independent photon-map estimates.
-                    Radii::Global { .. } => self.pixels[i].estimate_sum / n,
+                    Radii::Global { .. } => self.pixels[i].passes.estimate_sum / n,
                     Radii::PerPixel => self.pixels[i].direct_sum / n + self.indirect(i),
                 };
                 if self.passes == 0 {

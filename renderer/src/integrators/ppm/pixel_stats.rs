@@ -2,6 +2,7 @@
 //! (Hachisuka et al. 2008, eqs. 5-7 and 10) with the sums the error estimate needs, and what
 //! one photon pass gathered there.
 
+use crate::integrators::kernel_bias::PassSums;
 use glam::DVec3;
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -12,15 +13,9 @@ pub(super) struct PixelStats {
     pub(super) tau: DVec3,
     pub(super) direct_sum: DVec3,
     pub(super) photons_counted: u64,
-    /// Sums over passes of the one-pass estimates L_k and of their squares (PPPM's image is
-    /// their mean; for all variants their spread is the noise).
-    pub(super) estimate_sum: DVec3,
-    pub(super) estimate_sum_sq: DVec3,
-    /// The sum over odd passes: two independent halves for a robust r^2 (`error_estimate`).
-    pub(super) odd_estimate_sum: DVec3,
-    /// Sums over passes of the one-pass bias estimates b_k and of their squares.
-    pub(super) bias_sum: DVec3,
-    pub(super) bias_sum_sq: DVec3,
+    /// Sums over passes of the one-pass estimates L_k (PPPM's image is their mean; for all
+    /// variants their spread is the noise) and of their kernel-bias estimates.
+    pub(super) passes: PassSums,
 }
 
 impl PixelStats {

@@ -17,15 +17,26 @@ use crate::material::TransportMode;
 use crate::sampling::sampler::SampleSource;
 use glam::{Vec2, Vec3};
 
-/// The value of one camera subpath through film position `film`, whose pixel's light subpath
-/// is `own_light_path`.
+/// What one camera subpath brings its pixel.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct CameraSample {
+    /// Every technique's weighted contribution.
+    pub value: Vec3,
+    /// The merges' part of it before their normalisation 1 / (pi r^2 N_L), and the part of
+    /// that from light vertices within the inner radius (`kernel_bias`).
+    pub merged: Vec3,
+    pub merged_inner: Vec3,
+}
+
+/// One camera subpath through film position `film`, whose pixel's light subpath is
+/// `own_light_path`.
 pub(super) fn trace_camera_subpath(
     pass: &Pass,
     film: Vec2,
     own_light_path: &[LightVertex],
     sampler: &mut impl SampleSource,
     stats: &mut PassStats,
-) -> Vec3 {
+) -> CameraSample {
     let (scene, camera, w) = (pass.scene, pass.camera, &pass.weights);
     let mut ray = camera.generate_ray(film);
     let mut beta = Vec3::ONE;
@@ -35,6 +46,7 @@ pub(super) fn trace_camera_subpath(
     let mut specular_path = true;
     let mut eta_scale = 1.0f32;
     let mut l = Vec3::ZERO;
+    let (mut merged, mut merged_inner) = (Vec3::ZERO, Vec3::ZERO);
     loop {
         stats.rays += 1;
         let Some(si) = scene.intersect(&ray) else {
@@ -96,7 +108,15 @@ pub(super) fn trace_camera_subpath(
                 }
             }
             if pass.merges {
-                add(&mut l, merge(pass, &camera_vertex), stats);
+                let (outer, inner) = merge(pass, &camera_vertex);
+                match (sanitize(outer), sanitize(inner)) {
+                    (Some(outer), Some(inner)) => {
+                        l += outer * pass.merge_normalization;
+                        merged += outer;
+                        merged_inner += inner;
+                    }
+                    _ => stats.dropped += 1,
+                }
             }
         }
         let Some(next) = scatter(&si, &bsdf, wo, sampler, TransportMode::Radiance) else {
@@ -129,7 +149,11 @@ pub(super) fn trace_camera_subpath(
         ray = next.ray;
         path_length += 1;
     }
-    l
+    CameraSample {
+        value: l,
+        merged,
+        merged_inner,
+    }
 }
 
 /// Adds a technique's weighted value to the pixel's, or counts it dropped.
@@ -251,23 +275,23 @@ fn connect(pass: &Pass, x: &CameraVertex, y: &LightVertex, stats: &mut PassStats
 }
 
 /// Merges camera vertex `x` with every light vertex within the pass's radius (a photon
-/// density estimate over the disc, weighted per light vertex).
-fn merge(pass: &Pass, x: &CameraVertex) -> Vec3 {
+/// density estimate over the disc, weighted per light vertex): the sum before its
+/// normalisation, and the part of it from within the inner radius.
+fn merge(pass: &Pass, x: &CameraVertex) -> (Vec3, Vec3) {
     let Some(grid) = pass.grid else {
-        return Vec3::ZERO;
+        return (Vec3::ZERO, Vec3::ZERO);
     };
     let v = x.vertex;
     let (Some(si), Some(bsdf)) = (&v.si, &v.bsdf) else {
-        return Vec3::ZERO;
+        return (Vec3::ZERO, Vec3::ZERO);
     };
     let wo = si.shading.to_local(si.wo);
     let facing = if si.n.dot(si.wo) >= 0.0 { si.n } else { -si.n };
-    let mut sum = Vec3::ZERO;
+    let (mut sum, mut inner) = (Vec3::ZERO, Vec3::ZERO);
     for &c in grid.candidates(si.p) {
         let y = &pass.light_vertices[c as usize];
-        if y.path_length + x.path_length > pass.max_path_length
-            || (y.vertex.p - si.p).length_squared() > pass.radius_sq
-        {
+        let dist_sq = (y.vertex.p - si.p).length_squared();
+        if y.path_length + x.path_length > pass.max_path_length || dist_sq > pass.radius_sq {
             continue;
         }
         let Some(ys) = &y.vertex.si else {
@@ -293,7 +317,11 @@ fn merge(pass: &Pass, x: &CameraVertex) -> Vec3 {
             bsdf.pdf(wo, wi_local),
             bsdf.pdf(wi_local, wo),
         );
-        sum += f * y.vertex.beta * (cos_ratio * weight);
+        let value = f * y.vertex.beta * (cos_ratio * weight);
+        sum += value;
+        if dist_sq <= pass.inner_radius_sq {
+            inner += value;
+        }
     }
-    v.beta * sum * pass.merge_normalization
+    (v.beta * sum, v.beta * inner)
 }

@@ -19,20 +19,23 @@ pub mod mis;
 
 use crate::camera::Camera;
 use crate::error_estimate::ErrorEstimate;
-use crate::film::Film;
 use crate::image::Image;
-use crate::integrators::pixel_pass::{Row, pixel_pass};
+use crate::integrators::kernel_bias::{self, INNER_RADIUS_RATIO, PassSums};
 use crate::integrators::ppm::auto_radius;
 use crate::integrators::ppm::hash_grid::HashGrid;
 use crate::integrators::{
     Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PlotKind, PlotSeries, RenderContext,
     params,
 };
+use crate::sampling::sampler::Sampler;
 use crate::scene::Scene;
-use glam::{Vec2, Vec3};
+use camera_pass::CameraSample;
+use glam::Vec2;
+use glam::Vec3;
 use light_pass::LightVertex;
 use mis::MisWeights;
-use std::sync::atomic::AtomicBool;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Which techniques a run uses: both in `vcm`; one alone for tests (connections alone are
 /// bdpt, merges alone a bidirectional photon mapper).
@@ -72,7 +75,7 @@ impl VcmSettings {
         .live(),
         ParamSpec::new(
             "radius",
-            "Initial merge radius in scene units; 0 picks four pixel footprints at the median distance of the surfaces the camera sees.",
+            "Initial merge radius in scene units; 0 picks one pixel footprint at the median distance of the surfaces the camera sees.",
             0.0,
             (0.0, 1e6),
         )
@@ -90,6 +93,14 @@ pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
 }
 
 const MAX_HISTORY: usize = 2048;
+/// The automatic radius as a share of the photon mappers' (four pixel footprints): one
+/// footprint. Where connections sample a path well, a merge only adds its kernel's bias and
+/// noise; where only merges reach (caustics seen through glass) a larger radius pays. Measured
+/// at 15 s, 128 pixels wide (DESIGN.md section 5a): on the Cornell boxes and the door the
+/// error grows with the radius from a quarter footprint on (1.1 to 1.3 times the best at one
+/// footprint, 1.6 to 2.5 times at three or four); on the caustic pool it falls (3 times the
+/// best at one footprint, which is at three).
+const AUTO_RADIUS_SCALE: f64 = 0.25;
 
 /// What the two halves of a pass share.
 pub(crate) struct Pass<'a> {
@@ -101,6 +112,8 @@ pub(crate) struct Pass<'a> {
     connections: bool,
     merges: bool,
     radius_sq: f32,
+    /// The inner disc of the kernel-bias estimate (`kernel_bias`).
+    inner_radius_sq: f32,
     /// 1 / (pi r^2 N_L): a merge is a density estimate over the disc among N_L subpaths.
     merge_normalization: f32,
     light_vertices: &'a [LightVertex],
@@ -110,8 +123,9 @@ pub(crate) struct Pass<'a> {
 pub struct Vcm {
     ctx: RenderContext,
     settings: VcmSettings,
-    film: Film,
-    pass_buffer: Vec<Vec3>,
+    /// Per pixel, the passes' estimates and kernel-bias estimates: the image is their mean.
+    sums: Vec<PassSums>,
+    pass_buffer: Vec<CameraSample>,
     initial_radius: f64,
     radius_sq: f64,
     radius_floor_sq: f64,
@@ -129,13 +143,13 @@ impl Vcm {
         let initial_radius = if settings.radius > 0.0 {
             settings.radius
         } else {
-            auto_radius(&ctx)
+            AUTO_RADIUS_SCALE * auto_radius(&ctx)
         };
         let diagonal = ctx.scene.bounds.diagonal().length().max(1e-12) as f64;
         Vcm {
             settings,
-            film: Film::new(w, h),
-            pass_buffer: vec![Vec3::ZERO; w * h],
+            sums: vec![PassSums::default(); w * h],
+            pass_buffer: vec![CameraSample::default(); w * h],
             initial_radius,
             radius_sq: initial_radius * initial_radius,
             // As the photon mappers: f32 positions resolve no less than a millionth of the
@@ -175,7 +189,6 @@ impl Integrator for Vcm {
     fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let (scene, camera) = (&*self.ctx.scene, &self.ctx.camera);
         let pixels = (camera.width * camera.height) as usize;
-        let (width, height) = (camera.width as usize, camera.height as usize);
         let techniques = self.settings.techniques;
         let radius_sq = self.radius_sq as f32;
         let light_paths = pixels as f32;
@@ -195,6 +208,7 @@ impl Integrator for Vcm {
             connections: techniques.connections,
             merges: techniques.merges,
             radius_sq,
+            inner_radius_sq: radius_sq * (INNER_RADIUS_RATIO * INNER_RADIUS_RATIO) as f32,
             merge_normalization: 1.0 / (std::f32::consts::PI * radius_sq * light_paths),
             light_vertices: &[],
             grid: None,
@@ -217,32 +231,26 @@ impl Integrator for Vcm {
         let setup = &setup;
         let ends = &ends;
         stats = stats
-            + pixel_pass(
+            + camera_pass(
                 &mut self.pass_buffer,
-                width,
+                setup,
+                ends,
                 self.ctx.seed,
                 pass,
                 cancel,
-                |film: Vec2, row: &mut Row<()>| {
-                    // The jitter can round a film position up to the next pixel's edge.
-                    let (x, y) = (film.x as usize, film.y as usize);
-                    let pixel = y.min(height - 1) * width + x.min(width - 1);
-                    let start = if pixel == 0 { 0 } else { ends[pixel - 1] } as usize;
-                    let own = &setup.light_vertices[start..ends[pixel] as usize];
-                    row.stats.samples += 1;
-                    camera_pass::trace_camera_subpath(
-                        setup,
-                        film,
-                        own,
-                        &mut row.sampler,
-                        &mut row.stats,
-                    )
-                },
             )?;
         for (i, v) in splats {
-            self.pass_buffer[i] += v;
+            self.pass_buffer[i].value += v;
         }
-        self.film.add_pass(&self.pass_buffer);
+        let area = 1.0 / f64::from(setup.merge_normalization);
+        for (sums, sample) in self.sums.iter_mut().zip(&self.pass_buffer) {
+            let bias = kernel_bias::pass_bias(
+                sample.merged.as_dvec3(),
+                sample.merged_inner.as_dvec3(),
+                area,
+            );
+            sums.add(pass, sample.value.as_dvec3(), bias);
+        }
         self.pass_bytes = std::mem::size_of_val(vertices.as_slice())
             + std::mem::size_of_val(ends.as_slice())
             + grid.as_ref().map_or(0, |g| g.memory_bytes());
@@ -256,18 +264,35 @@ impl Integrator for Vcm {
     }
 
     fn memory_bytes(&self) -> usize {
-        self.film.memory_bytes()
+        std::mem::size_of_val(self.sums.as_slice())
             + std::mem::size_of_val(self.pass_buffer.as_slice())
             + std::mem::size_of_val(self.radius_history.as_slice())
             + self.pass_bytes
     }
 
     fn image(&self) -> Image {
-        self.film.image()
+        let inv = 1.0 / self.passes.max(1) as f64;
+        Image {
+            width: self.ctx.camera.width as usize,
+            height: self.ctx.camera.height as usize,
+            pixels: self
+                .sums
+                .iter()
+                .map(|s| (s.estimate_sum * inv).as_vec3())
+                .collect(),
+        }
     }
 
+    /// Each pass is an estimate with its own radius, as PPPM's: the noise from their spread,
+    /// the merges' kernel bias by Richardson extrapolation on the same light vertices
+    /// (`kernel_bias`).
     fn error_estimate(&self) -> Option<ErrorEstimate> {
-        self.film.error_estimate()
+        if self.passes < 2 {
+            return None;
+        }
+        let image = self.image();
+        let pixels = kernel_bias::pixel_errors(&image, self.passes, |i| &self.sums[i]);
+        ErrorEstimate::from_pixels(image.width, image.height, &pixels)
     }
 
     fn automatic(&self) -> Vec<(&'static str, f64)> {
@@ -292,4 +317,44 @@ impl Integrator for Vcm {
             point_names: Vec::new(),
         }]
     }
+}
+
+/// The camera half of pass `pass` into `buffer`: image rows in parallel, each pixel's sampler
+/// keyed by (seed, pixel, pass) as `pixel_pass`'s, cancellation checked per row.
+fn camera_pass(
+    buffer: &mut [CameraSample],
+    setup: &Pass,
+    ends: &[u32],
+    seed: u64,
+    pass: u64,
+    cancel: &AtomicBool,
+) -> Result<PassStats, Cancelled> {
+    let width = setup.camera.width as usize;
+    let rows: Vec<PassStats> = buffer
+        .par_chunks_mut(width.max(1))
+        .enumerate()
+        .map(|(y, row)| {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
+            }
+            let mut sampler = Sampler::new(seed);
+            let mut stats = PassStats::default();
+            for (x, out) in row.iter_mut().enumerate() {
+                let pixel = y * width + x;
+                sampler.start_pixel_sample(pixel as u64, pass);
+                let film = Vec2::new(x as f32, y as f32) + sampler.get_2d();
+                let start = if pixel == 0 {
+                    0
+                } else {
+                    ends[pixel - 1] as usize
+                };
+                let own = &setup.light_vertices[start..ends[pixel] as usize];
+                *out =
+                    camera_pass::trace_camera_subpath(setup, film, own, &mut sampler, &mut stats);
+                stats.samples += 1;
+            }
+            Ok(stats)
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(rows.into_iter().fold(PassStats::default(), |a, b| a + b))
 }
