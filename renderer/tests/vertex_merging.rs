@@ -132,3 +132,95 @@ fn merges_and_vcm_converge_to_the_path_tracer() {
         }
     }
 }
+
+/// The technique shares the viewer plots account for the whole image: over every path length
+/// and technique they add up to the image's luminance times the passes (each technique's
+/// weighted value is recorded once, where it is added), merges have none with connections
+/// alone, and on the Cornell box with glass merges bring part of the light (the caustic).
+#[test]
+fn the_technique_shares_add_up_to_the_image() {
+    use caustica_renderer::geometry::luminance;
+    use caustica_renderer::integrators::Integrator;
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    for (techniques, merges_expected) in [(Techniques::default(), true), (CONNECTIONS, false)] {
+        let mut it = vcm(
+            context(cornell_box(true), 24, 3),
+            techniques,
+            &[("max_depth", 5.0)],
+        );
+        let passes = 8;
+        for pass in 0..passes {
+            it.render_counted_pass(pass, &cancel).unwrap();
+        }
+        let image: f64 = it
+            .image()
+            .pixels
+            .iter()
+            .map(|p| f64::from(luminance(*p)))
+            .sum();
+        let shares = it.technique_shares();
+        let connections: f64 = shares.lengths.iter().flat_map(|l| &l.connections).sum();
+        let merges: f64 = shares.lengths.iter().flat_map(|l| &l.merges).sum();
+        let total = image * passes as f64;
+        eprintln!(
+            "{techniques:?}: connections {connections:.3}, merges {merges:.3}, image x passes {total:.3}"
+        );
+        assert!(
+            ((connections + merges) / total - 1.0).abs() < 1e-4,
+            "{techniques:?}: shares {} against {total}",
+            connections + merges
+        );
+        assert_eq!(
+            merges > 0.01 * total,
+            merges_expected,
+            "{techniques:?}: merges {merges}"
+        );
+        assert_eq!(
+            it.plots().iter().filter(|p| p.plot == "Techniques").count(),
+            6
+        );
+    }
+}
+
+/// The radius schedule, and its live controls: r_{i+1}^2 = r_i^2 ((i + 1) / (i + 2))^(1 - alpha)
+/// (r_0^2 (i + 1)^(alpha - 1) while alpha stays), alpha = 1 keeps the radius, a radius set
+/// live is the next pass's and shrinks on from there, and 0 returns to the automatic radius
+/// shrunk as far as the passes so far would have.
+#[test]
+fn the_radius_follows_its_schedule_and_its_live_changes() {
+    use caustica_renderer::integrators::Integrator;
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let mut it = vcm(
+        context(cornell_box(false), 8, 1),
+        Techniques::default(),
+        &[],
+    );
+    let r0 = it.radius();
+    assert!(r0 > 0.0 && (r0 - it.initial_radius()).abs() < 1e-12);
+    for pass in 0..4 {
+        it.render_counted_pass(pass, &cancel).unwrap();
+    }
+    let expected = r0 * 5f64.powf(-0.25 / 2.0);
+    assert!(
+        (it.radius() / expected - 1.0).abs() < 1e-9,
+        "{} {expected}",
+        it.radius()
+    );
+    it.set_live_param("alpha", 1.0);
+    let before = it.radius();
+    it.render_counted_pass(4, &cancel).unwrap();
+    assert!((it.radius() / before - 1.0).abs() < 1e-12);
+    it.set_live_param("radius", 0.05);
+    assert_eq!(it.radius(), 0.05);
+    it.set_live_param("alpha", 0.5);
+    it.render_counted_pass(5, &cancel).unwrap();
+    let expected = 0.05 * (6.0f64 / 7.0).powf(0.5 / 2.0);
+    assert!((it.radius() / expected - 1.0).abs() < 1e-9);
+    it.set_live_param("radius", 0.0);
+    let expected = r0 * 7f64.powf(-0.5 / 2.0);
+    assert!(
+        (it.radius() / expected - 1.0).abs() < 1e-9,
+        "{} {expected}",
+        it.radius()
+    );
+}

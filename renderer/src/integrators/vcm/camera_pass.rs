@@ -7,6 +7,7 @@ use super::light_pass::LightVertex;
 use super::mis::{
     SubpathMis, weight_connection, weight_emission_hit, weight_merge, weight_next_event,
 };
+use super::techniques::TechniqueShares;
 use super::{Pass, light_densities};
 use crate::film::sanitize;
 use crate::integrators::PassStats;
@@ -36,6 +37,7 @@ pub(super) fn trace_camera_subpath(
     own_light_path: &[LightVertex],
     sampler: &mut impl SampleSource,
     stats: &mut PassStats,
+    shares: &mut TechniqueShares,
 ) -> CameraSample {
     let (scene, camera, w) = (pass.scene, pass.camera, &pass.weights);
     let mut ray = camera.generate_ray(film);
@@ -56,7 +58,9 @@ pub(super) fn trace_camera_subpath(
                     let weight = emission_weight(pass, &mis, path_length, specular_path, || {
                         light_densities::emitter_hit(scene, env, -ray.d)
                     });
-                    add(&mut l, beta * le * weight, stats);
+                    if let Some(v) = add(&mut l, beta * le * weight, stats) {
+                        shares.connection(path_length, 0, v);
+                    }
                 }
             }
             break;
@@ -77,7 +81,9 @@ pub(super) fn trace_camera_subpath(
                 let weight = emission_weight(pass, &mis, path_length, specular_path, || {
                     light_densities::emitter_hit(scene, index, si.wo)
                 });
-                add(&mut l, beta * le * weight, stats);
+                if let Some(v) = add(&mut l, beta * le * weight, stats) {
+                    shares.connection(path_length, 0, v);
+                }
             }
         }
         if path_length >= pass.max_path_length {
@@ -94,21 +100,23 @@ pub(super) fn trace_camera_subpath(
             };
             if pass.connections {
                 if path_length < pass.max_path_length {
-                    add(
-                        &mut l,
-                        next_event(pass, &camera_vertex, sampler, stats),
-                        stats,
-                    );
+                    let v = next_event(pass, &camera_vertex, sampler, stats);
+                    if let Some(v) = add(&mut l, v, stats) {
+                        shares.connection(path_length + 1, 1, v);
+                    }
                 }
                 for y in own_light_path {
                     if y.path_length + 1 + path_length > pass.max_path_length {
                         break;
                     }
-                    add(&mut l, connect(pass, &camera_vertex, y, stats), stats);
+                    let v = connect(pass, &camera_vertex, y, stats);
+                    if let Some(v) = add(&mut l, v, stats) {
+                        shares.connection(y.path_length + 1 + path_length, y.path_length + 1, v);
+                    }
                 }
             }
             if pass.merges {
-                let (outer, inner) = merge(pass, &camera_vertex);
+                let (outer, inner) = merge(pass, &camera_vertex, shares);
                 match (sanitize(outer), sanitize(inner)) {
                     (Some(outer), Some(inner)) => {
                         l += outer * pass.merge_normalization;
@@ -156,12 +164,14 @@ pub(super) fn trace_camera_subpath(
     }
 }
 
-/// Adds a technique's weighted value to the pixel's, or counts it dropped.
-fn add(l: &mut Vec3, v: Vec3, stats: &mut PassStats) {
-    match sanitize(v) {
+/// Adds a technique's weighted value to the pixel's and gives it back, or counts it dropped.
+fn add(l: &mut Vec3, v: Vec3, stats: &mut PassStats) -> Option<Vec3> {
+    let v = sanitize(v);
+    match v {
         Some(v) => *l += v,
         None => stats.dropped += 1,
     }
+    v.filter(|v| *v != Vec3::ZERO)
 }
 
 /// A non-specular vertex of a camera subpath, with what its techniques need.
@@ -277,7 +287,7 @@ fn connect(pass: &Pass, x: &CameraVertex, y: &LightVertex, stats: &mut PassStats
 /// Merges camera vertex `x` with every light vertex within the pass's radius (a photon
 /// density estimate over the disc, weighted per light vertex): the sum before its
 /// normalisation, and the part of it from within the inner radius.
-fn merge(pass: &Pass, x: &CameraVertex) -> (Vec3, Vec3) {
+fn merge(pass: &Pass, x: &CameraVertex, shares: &mut TechniqueShares) -> (Vec3, Vec3) {
     let Some(grid) = pass.grid else {
         return (Vec3::ZERO, Vec3::ZERO);
     };
@@ -318,6 +328,11 @@ fn merge(pass: &Pass, x: &CameraVertex) -> (Vec3, Vec3) {
             bsdf.pdf(wi_local, wo),
         );
         let value = f * y.vertex.beta * (cos_ratio * weight);
+        shares.merge(
+            y.path_length + x.path_length,
+            y.path_length,
+            v.beta * value * pass.merge_normalization,
+        );
         sum += value;
         if dist_sq <= pass.inner_radius_sq {
             inner += value;

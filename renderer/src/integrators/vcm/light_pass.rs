@@ -3,6 +3,7 @@
 //! with its MIS quantities, and joined to the camera (t = 1) as it is found.
 
 use super::mis::{SubpathMis, weight_light_trace};
+use super::techniques::TechniqueShares;
 use super::{Pass, light_densities};
 use crate::film::sanitize;
 use crate::integrators::bdpt::connect::visible;
@@ -36,6 +37,8 @@ pub(super) struct LightPaths {
     pub ends: Vec<u32>,
     /// What light tracing brought to the film: (pixel, value), in row order.
     pub splats: Vec<(usize, Vec3)>,
+    /// What light tracing brought, by path length (`techniques`).
+    pub shares: TechniqueShares,
 }
 
 /// The light half of pass `pass`: image rows in parallel, each with its sampler keyed by
@@ -60,6 +63,7 @@ pub(super) fn light_pass(
                 vertices: Vec::new(),
                 ends: Vec::with_capacity(width),
                 splats: Vec::new(),
+                shares: TechniqueShares::default(),
             };
             let mut st = PassStats::default();
             for x in 0..width {
@@ -69,6 +73,7 @@ pub(super) fn light_pass(
                     &mut sampler,
                     &mut row.vertices,
                     &mut row.splats,
+                    &mut row.shares,
                     &mut st,
                 );
                 row.ends.push(row.vertices.len() as u32);
@@ -80,12 +85,14 @@ pub(super) fn light_pass(
         vertices: Vec::with_capacity(rows.iter().map(|r| r.0.vertices.len()).sum()),
         ends: Vec::with_capacity(width * height),
         splats: Vec::new(),
+        shares: TechniqueShares::default(),
     };
     for (row, st) in rows {
         let offset = all.vertices.len() as u32;
         all.ends.extend(row.ends.iter().map(|e| e + offset));
         all.vertices.extend(row.vertices);
         all.splats.extend(row.splats);
+        all.shares.add(&row.shares);
         *stats = *stats + st;
     }
     Ok(all)
@@ -98,6 +105,7 @@ fn trace_light_subpath(
     sampler: &mut impl SampleSource,
     vertices: &mut Vec<LightVertex>,
     splats: &mut Vec<(usize, Vec3)>,
+    shares: &mut TechniqueShares,
     stats: &mut PassStats,
 ) {
     let scene = pass.scene;
@@ -145,7 +153,7 @@ fn trace_light_subpath(
                 mis,
             };
             if pass.connections && path_length < pass.max_path_length {
-                connect_to_camera(pass, &vertex, splats, stats);
+                connect_to_camera(pass, &vertex, splats, shares, stats);
             }
             vertices.push(vertex);
         }
@@ -186,6 +194,7 @@ fn connect_to_camera(
     pass: &Pass,
     y: &LightVertex,
     splats: &mut Vec<(usize, Vec3)>,
+    shares: &mut TechniqueShares,
     stats: &mut PassStats,
 ) {
     let (scene, camera) = (pass.scene, pass.camera);
@@ -212,6 +221,7 @@ fn connect_to_camera(
         stats.dropped += 1;
         return;
     };
+    shares.connection(y.path_length + 1, y.path_length + 1, value);
     let (x, yy) = (cs.raster.x as usize, cs.raster.y as usize);
     splats.push((yy * camera.width as usize + x, value));
 }

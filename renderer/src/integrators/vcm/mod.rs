@@ -16,6 +16,7 @@ mod camera_pass;
 pub mod light_densities;
 mod light_pass;
 pub mod mis;
+pub mod techniques;
 
 use crate::camera::Camera;
 use crate::error_estimate::ErrorEstimate;
@@ -36,6 +37,7 @@ use light_pass::LightVertex;
 use mis::MisWeights;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
+use techniques::TechniqueShares;
 
 /// Which techniques a run uses: both in `vcm`; one alone for tests (connections alone are
 /// bdpt, merges alone a bidirectional photon mapper).
@@ -75,11 +77,12 @@ impl VcmSettings {
         .live(),
         ParamSpec::new(
             "radius",
-            "Initial merge radius in scene units; 0 picks one pixel footprint at the median distance of the surfaces the camera sees.",
+            "Merge radius in scene units, shrinking from there by alpha's schedule; 0 picks one pixel footprint at the median distance of the surfaces the camera sees. Live: sets the next pass's radius.",
             0.0,
             (0.0, 1e6),
         )
-        .automatic_at_zero(),
+        .automatic_at_zero()
+        .live(),
         params::MAX_DEPTH,
     ];
 
@@ -132,6 +135,8 @@ pub struct Vcm {
     passes: u64,
     /// Bytes of the last pass's light vertices and grid (they live only during a pass).
     pass_bytes: usize,
+    /// What each technique brought so far.
+    shares: TechniqueShares,
     /// (passes, radius), thinned to stay bounded.
     radius_history: Vec<[f64; 2]>,
     history_stride: u64,
@@ -157,10 +162,16 @@ impl Vcm {
             radius_floor_sq: (1e-6 * diagonal).powi(2),
             passes: 0,
             pass_bytes: 0,
+            shares: TechniqueShares::default(),
             radius_history: Vec::new(),
             history_stride: 1,
             ctx,
         }
+    }
+
+    /// What each technique brought to the image so far.
+    pub fn technique_shares(&self) -> &TechniqueShares {
+        &self.shares
     }
 
     /// The merge radius the next pass uses.
@@ -218,6 +229,7 @@ impl Integrator for Vcm {
             vertices,
             ends,
             splats,
+            shares,
         } = light_pass::light_pass(&setup, self.ctx.seed, pass, cancel, &mut stats)?;
         let grid = techniques.merges.then(|| {
             let points: Vec<Option<(Vec3, f32)>> = vertices
@@ -230,15 +242,17 @@ impl Integrator for Vcm {
         setup.grid = grid.as_ref();
         let setup = &setup;
         let ends = &ends;
-        stats = stats
-            + camera_pass(
-                &mut self.pass_buffer,
-                setup,
-                ends,
-                self.ctx.seed,
-                pass,
-                cancel,
-            )?;
+        let (camera_stats, camera_shares) = camera_pass(
+            &mut self.pass_buffer,
+            setup,
+            ends,
+            self.ctx.seed,
+            pass,
+            cancel,
+        )?;
+        stats = stats + camera_stats;
+        self.shares.add(&shares);
+        self.shares.add(&camera_shares);
         for (i, v) in splats {
             self.pass_buffer[i].value += v;
         }
@@ -302,12 +316,26 @@ impl Integrator for Vcm {
     fn set_live_param(&mut self, name: &str, value: f64) {
         match name {
             "alpha" => self.settings.alpha = value,
+            // The schedule goes on from the new radius; 0 returns to the automatic one,
+            // shrunk as far as the passes so far would have shrunk it.
+            "radius" => {
+                self.settings.radius = value;
+                let radius = if value > 0.0 {
+                    value
+                } else {
+                    self.initial_radius = AUTO_RADIUS_SCALE * auto_radius(&self.ctx);
+                    let shrink = (self.passes as f64 + 1.0).powf(self.settings.alpha - 1.0);
+                    self.initial_radius * shrink.sqrt()
+                };
+                self.radius_sq = (radius * radius).max(self.radius_floor_sq);
+            }
             _ => debug_assert!(false, "{name} is not live"),
         }
     }
 
     fn plots(&self) -> Vec<PlotSeries> {
-        vec![PlotSeries {
+        let mut plots = self.shares.plots();
+        plots.push(PlotSeries {
             plot: "Radius".into(),
             name: "merge radius".into(),
             kind: PlotKind::Line,
@@ -315,7 +343,8 @@ impl Integrator for Vcm {
             y_label: "radius".into(),
             points: self.radius_history.clone(),
             point_names: Vec::new(),
-        }]
+        });
+        plots
     }
 }
 
@@ -328,9 +357,9 @@ fn camera_pass(
     seed: u64,
     pass: u64,
     cancel: &AtomicBool,
-) -> Result<PassStats, Cancelled> {
+) -> Result<(PassStats, TechniqueShares), Cancelled> {
     let width = setup.camera.width as usize;
-    let rows: Vec<PassStats> = buffer
+    let rows: Vec<(PassStats, TechniqueShares)> = buffer
         .par_chunks_mut(width.max(1))
         .enumerate()
         .map(|(y, row)| {
@@ -339,6 +368,7 @@ fn camera_pass(
             }
             let mut sampler = Sampler::new(seed);
             let mut stats = PassStats::default();
+            let mut shares = TechniqueShares::default();
             for (x, out) in row.iter_mut().enumerate() {
                 let pixel = y * width + x;
                 sampler.start_pixel_sample(pixel as u64, pass);
@@ -349,12 +379,23 @@ fn camera_pass(
                     ends[pixel - 1] as usize
                 };
                 let own = &setup.light_vertices[start..ends[pixel] as usize];
-                *out =
-                    camera_pass::trace_camera_subpath(setup, film, own, &mut sampler, &mut stats);
+                *out = camera_pass::trace_camera_subpath(
+                    setup,
+                    film,
+                    own,
+                    &mut sampler,
+                    &mut stats,
+                    &mut shares,
+                );
                 stats.samples += 1;
             }
-            Ok(stats)
+            Ok((stats, shares))
         })
         .collect::<Result<_, _>>()?;
-    Ok(rows.into_iter().fold(PassStats::default(), |a, b| a + b))
+    let mut total = (PassStats::default(), TechniqueShares::default());
+    for (stats, shares) in rows {
+        total.0 = total.0 + stats;
+        total.1.add(&shares);
+    }
+    Ok(total)
 }
