@@ -31,9 +31,25 @@ fn parameters() -> Vec<(&'static str, Vec<(&'static str, &'static ParamSpec)>)> 
     out
 }
 
-/// Help of one flag: the first integrator's description, then which integrators read it and
-/// their defaults (`max_depth`: 64 for the path tracers, 10 for MMLT).
+/// Help of one flag: its description (each integrator's where they differ, as `radius`'s
+/// automatic choice does), then which integrators read it and their defaults (`max_depth`: 64
+/// for the path tracers, 10 for MMLT).
 fn help(users: &[(&'static str, &'static ParamSpec)]) -> String {
+    let mut docs: Vec<(Vec<&str>, &str)> = Vec::new();
+    for (integrator, spec) in users {
+        match docs.iter_mut().find(|(_, d)| *d == spec.doc) {
+            Some((names, _)) => names.push(integrator),
+            None => docs.push((vec![integrator], spec.doc)),
+        }
+    }
+    let doc = match docs.as_slice() {
+        [(_, doc)] => doc.to_string(),
+        _ => docs
+            .iter()
+            .map(|(names, doc)| format!("{}: {doc}", names.join(", ")))
+            .collect::<Vec<_>>()
+            .join(" "),
+    };
     let mut groups: Vec<(Vec<&str>, f64)> = Vec::new();
     for (integrator, spec) in users {
         match groups.iter_mut().find(|(_, d)| *d == spec.default) {
@@ -45,7 +61,7 @@ fn help(users: &[(&'static str, &'static ParamSpec)]) -> String {
         .iter()
         .map(|(names, d)| format!("{}: default {d}", names.join(", ")))
         .collect();
-    format!("{} [{}]", users[0].1.doc, defaults.join("; "))
+    format!("{doc} [{}]", defaults.join("; "))
 }
 
 fn parse_number(s: &str) -> Result<f64, String> {
@@ -118,7 +134,13 @@ mod tests {
             }
         }
         assert!(
-            help.contains("[pt, bdpt, mmlt, ppm, sppm, pppm: default 64]"),
+            help.contains("[pt, bdpt, mmlt, ppm, sppm, pppm, vcm: default 64]"),
+            "{help}"
+        );
+        // Where integrators describe a parameter differently, each description is shown.
+        assert!(
+            help.contains("ppm, sppm, pppm: Initial gather radius")
+                && help.contains("vcm: Merge radius"),
             "{help}"
         );
         assert!(Cli::try_parse_from(["x", "--alpha", "many"]).is_err());

@@ -7,7 +7,7 @@ use caustica_renderer::scene::{Scene, SceneDescription};
 use std::sync::Arc;
 
 use crate::common;
-use common::{MirroredLight, log_log_slope, mean};
+use common::{ExpectedEstimate, MirroredLight, log_log_slope, mean};
 
 /// `common::render` with this file's seed.
 fn render(
@@ -367,55 +367,6 @@ fn the_grid_is_rebuilt_only_when_hit_points_or_radii_require_it() {
     }
 }
 
-/// The expected indirect estimate and its variance, accumulated pass by pass from the radii
-/// each pixel gathered with. All three variants' indirect estimates are the mean over passes
-/// of one-pass estimates tau_k / (pi R_k^2 P): for PPPM by construction (Knaus & Zwicker 2011,
-/// eq. 21), for PPM and SPPM because eq. 7's rescaling of tau by R_{k+1}^2 / R_k^2 telescopes
-/// (Hachisuka et al. 2008). R_k is fixed before pass k's photons are traced, so given it the
-/// pass's expected estimate is rho / pi times the disc mean of E, and its variance, the
-/// estimate being c M with M binomial (P photons, probability p = the disc's share of the
-/// emitted flux), is c^2 P p (1 - p). The pixels' estimates are correlated, so the standard
-/// deviation of their mean is bounded by the mean of theirs; passes are independent given
-/// the radii, so their variances add.
-struct ExpectedEstimate {
-    passes: u64,
-    mean_sum: f64,
-    variance_sum: f64,
-}
-
-impl ExpectedEstimate {
-    fn add_pass(
-        &mut self,
-        setup: &MirroredLight,
-        footprints: &[glam::DVec2],
-        radii: &[f64],
-        photons: u64,
-    ) {
-        use std::f64::consts::PI;
-        let f = setup.albedo / PI;
-        let pixels = footprints.len() as f64;
-        let mut sd = 0.0;
-        for (x, r) in footprints.iter().zip(radii) {
-            let a = setup.disc_mean(*x, *r);
-            self.mean_sum += f * a / pixels;
-            let c = f * 4.0 * PI * setup.intensity / (PI * r * r * photons as f64);
-            let p = a * PI * r * r / (4.0 * PI * setup.intensity);
-            sd += (c * c * photons as f64 * p * (1.0 - p)).sqrt() / pixels;
-        }
-        self.variance_sum += sd * sd;
-        self.passes += 1;
-    }
-
-    /// Expected kernel bias of the mean over pixels, and its standard deviation.
-    fn bias_and_sigma(&self, setup: &MirroredLight, footprints: &[glam::DVec2]) -> (f64, f64) {
-        let n = self.passes as f64;
-        (
-            self.mean_sum / n - setup.mirrored_radiance(footprints),
-            self.variance_sum.sqrt() / n,
-        )
-    }
-}
-
 /// The kernel's bias, measured directly: on the mirrored light, whose photon-carried radiance
 /// has known curvature, the image's mean less the exact radiance is the density estimate's
 /// bias (the direct part is exact but for the pixels' jitter, below 1e-5 of it here). At every
@@ -453,18 +404,14 @@ fn the_kernel_bias_matches_its_expectation_and_falls_like_n_to_the_alpha_minus_o
     for alpha in [0.5, 2.0 / 3.0, 1.0] {
         // The asymptotic rate of PPPM's expectation at the light's foot.
         let centre = [glam::DVec2::ZERO];
-        let mut far = ExpectedEstimate {
-            passes: 0,
-            mean_sum: 0.0,
-            variance_sum: 0.0,
-        };
+        let mut far = ExpectedEstimate::default();
         let mut radius_sq = initial_radius * initial_radius;
         let mut far_points = Vec::new();
         for k in 1..=1u64 << 16 {
-            far.add_pass(&setup, &centre, &[radius_sq.sqrt()], photons);
+            far.add_pass(&setup, &centre, &[radius_sq.sqrt()], photons, false);
             radius_sq *= (k as f64 + alpha) / (k as f64 + 1.0);
             if k >= 1 << 13 && k.is_power_of_two() {
-                far_points.push((k as f64, -far.bias_and_sigma(&setup, &centre).0));
+                far_points.push((k as f64, -far.bias_and_sigma(&setup, &centre, false).0));
             }
         }
         if alpha < 1.0 {
@@ -491,22 +438,19 @@ fn the_kernel_bias_matches_its_expectation_and_falls_like_n_to_the_alpha_minus_o
                 variant,
                 settings,
             );
-            let mut expected = ExpectedEstimate {
-                passes: 0,
-                mean_sum: 0.0,
-                variance_sum: 0.0,
-            };
+            let mut expected = ExpectedEstimate::default();
             let mut ends = Vec::new();
             for pass in 0..last {
                 let radii: Vec<f64> = (0..footprints.len()).map(|i| pm.radius(i)).collect();
                 pm.render_pass(pass, &cancel).unwrap();
-                expected.add_pass(&setup, &footprints, &radii, photons);
+                expected.add_pass(&setup, &footprints, &radii, photons, false);
                 let n = pass + 1;
                 if n >= first && n.is_power_of_two() {
                     let img = pm.image();
                     let mean = img.pixels.iter().map(|p| p.x as f64).sum::<f64>() / pixels;
                     let measured = mean - direct - setup.mirrored_radiance(&footprints);
-                    let (expected_bias, sigma) = expected.bias_and_sigma(&setup, &footprints);
+                    let (expected_bias, sigma) =
+                        expected.bias_and_sigma(&setup, &footprints, false);
                     eprintln!(
                         "{variant:?}, alpha {alpha:.3}, n {n}: bias {measured:.5}, expected {expected_bias:.5} +- {sigma:.5}"
                     );

@@ -224,3 +224,74 @@ fn the_radius_follows_its_schedule_and_its_live_changes() {
         it.radius()
     );
 }
+
+/// vcm's kernel bias, measured directly, falls at the rate its radius schedule gives: on the
+/// mirrored light with merges alone (each path has one merge, of weight 1, so this is density
+/// estimation of the direct and the mirrored light with N_L = 1024 light subpaths a pass) the
+/// image's mean less the exact radiance must match the expectation computed from the radii
+/// the passes used (`ExpectedEstimate`, as for the photon mappers) within four standard
+/// deviations at every checkpoint, and its slope from 8 to 256 passes that expectation's
+/// slope; alpha 1/2, 3/4 and 1 have distinct rates (r_i^2 like i^(alpha - 1)).
+#[test]
+fn the_kernel_bias_of_merges_falls_as_the_radius_schedule_gives() {
+    use crate::common::{ExpectedEstimate, MirroredLight};
+    use caustica_renderer::integrators::Integrator;
+    let setup = MirroredLight::new();
+    let scene = Arc::new(Scene::build(setup.desc.clone()).unwrap());
+    let camera = Camera::new(&scene.camera, 32, 32);
+    let footprints = setup.pixel_footprints(&camera);
+    let pixels = footprints.len() as f64;
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let (first, last) = (8u64, 256u64);
+    for alpha in [0.5, 0.75, 1.0] {
+        let ctx = RenderContext {
+            scene: scene.clone(),
+            camera,
+            seed: 5,
+        };
+        let mut it = vcm(
+            ctx,
+            MERGES,
+            &[("radius", 1.0), ("alpha", alpha), ("max_depth", 2.0)],
+        );
+        let mut expected = ExpectedEstimate::default();
+        let mut ends = Vec::new();
+        for pass in 0..last {
+            let radii = vec![it.radius(); footprints.len()];
+            it.render_pass(pass, &cancel).unwrap();
+            expected.add_pass(&setup, &footprints, &radii, pixels as u64, true);
+            let n = pass + 1;
+            if n >= first && n.is_power_of_two() {
+                let img = it.image();
+                let mean = img.pixels.iter().map(|p| p.x as f64).sum::<f64>() / pixels;
+                let measured = mean
+                    - setup.direct_radiance(&footprints)
+                    - setup.mirrored_radiance(&footprints);
+                let (expected_bias, sigma) = expected.bias_and_sigma(&setup, &footprints, true);
+                eprintln!(
+                    "alpha {alpha:.2}, n {n}: bias {measured:.5}, expected {expected_bias:.5} +- {sigma:.5}"
+                );
+                assert!(
+                    (measured - expected_bias).abs() < 4.0 * sigma,
+                    "alpha {alpha}, n {n}: bias {measured}, expected {expected_bias} +- {sigma}"
+                );
+                if n == first || n == last {
+                    ends.push((measured, expected_bias, sigma));
+                }
+            }
+        }
+        let span = (last as f64 / first as f64).ln();
+        let slope = (ends[1].0 / ends[0].0).ln() / span;
+        let expected_slope = (ends[1].1 / ends[0].1).ln() / span;
+        let tolerance =
+            4.0 * ((ends[0].2 / ends[0].1).powi(2) + (ends[1].2 / ends[1].1).powi(2)).sqrt() / span;
+        eprintln!(
+            "alpha {alpha:.2}: bias slope {slope:.3}, expected {expected_slope:.3} +- {:.3}",
+            tolerance / 4.0
+        );
+        assert!(
+            (slope - expected_slope).abs() < tolerance,
+            "alpha {alpha}: slope {slope}, expected {expected_slope} within {tolerance}"
+        );
+    }
+}

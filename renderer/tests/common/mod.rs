@@ -225,10 +225,21 @@ impl MirroredLight {
         self.intensity / (1.0 + d * d).powf(1.5)
     }
 
-    /// The mean of the mirrored irradiance over the disc of radius `r` about `x`: the expected
-    /// value of a photon density estimate with a uniform kernel of that radius. Midpoint rule
-    /// in the radius, the trapezoid rule (spectrally accurate for periodic integrands) in angle.
-    pub fn disc_mean(&self, x: glam::DVec2, r: f64) -> f64 {
+    /// The exact direct radiance, averaged over pixels seeing `footprints`.
+    pub fn direct_radiance(&self, footprints: &[glam::DVec2]) -> f64 {
+        self.albedo / std::f64::consts::PI
+            * footprints
+                .iter()
+                .map(|x| self.direct_irradiance(x.length()))
+                .sum::<f64>()
+            / footprints.len() as f64
+    }
+
+    /// The mean of the mirrored irradiance (and the direct one `with_direct`) over the disc of
+    /// radius `r` about `x`: the expected value of a photon density estimate with a uniform
+    /// kernel of that radius. Midpoint rule in the radius, the trapezoid rule (spectrally
+    /// accurate for periodic integrands) in angle.
+    pub fn disc_mean(&self, x: glam::DVec2, r: f64, with_direct: bool) -> f64 {
         let (nr, nphi) = (16, 16);
         let mut sum = 0.0;
         for i in 0..nr {
@@ -236,7 +247,13 @@ impl MirroredLight {
             for j in 0..nphi {
                 let phi = std::f64::consts::TAU * j as f64 / nphi as f64;
                 let p = x + rho * glam::DVec2::new(phi.cos(), phi.sin());
-                sum += self.mirrored_irradiance(p.length()) * rho;
+                let d = p.length();
+                let direct = if with_direct {
+                    self.direct_irradiance(d)
+                } else {
+                    0.0
+                };
+                sum += (self.mirrored_irradiance(d) + direct) * rho;
             }
         }
         sum * (r / nr as f64) * (std::f64::consts::TAU / nphi as f64)
@@ -351,5 +368,68 @@ pub fn assert_strategies_agree(desc: SceneDescription, max_depth: usize) {
                 "depth {depth}: strategy ({s}, {t}) gives {m}, next-event estimation {m_ref} (tolerance {tolerance})"
             );
         }
+    }
+}
+
+/// The expected density estimate and its variance on the mirrored light (the mirrored part,
+/// as photons carry it, or with the direct part too, as vcm's merges alone do), accumulated
+/// pass by pass from the radii
+/// each pixel gathered with. All three variants' indirect estimates are the mean over passes
+/// of one-pass estimates tau_k / (pi R_k^2 P): for PPPM by construction (Knaus & Zwicker 2011,
+/// eq. 21), for PPM and SPPM because eq. 7's rescaling of tau by R_{k+1}^2 / R_k^2 telescopes
+/// (Hachisuka et al. 2008). R_k is fixed before pass k's photons are traced, so given it the
+/// pass's expected estimate is rho / pi times the disc mean of E, and its variance, the
+/// estimate being c M with M binomial (P photons, probability p = the disc's share of the
+/// emitted flux), is c^2 P p (1 - p). The pixels' estimates are correlated, so the standard
+/// deviation of their mean is bounded by the mean of theirs; passes are independent given
+/// the radii, so their variances add.
+#[derive(Default)]
+pub struct ExpectedEstimate {
+    passes: u64,
+    mean_sum: f64,
+    variance_sum: f64,
+}
+
+impl ExpectedEstimate {
+    pub fn add_pass(
+        &mut self,
+        setup: &MirroredLight,
+        footprints: &[glam::DVec2],
+        radii: &[f64],
+        photons: u64,
+        with_direct: bool,
+    ) {
+        use std::f64::consts::PI;
+        let f = setup.albedo / PI;
+        let pixels = footprints.len() as f64;
+        let mut sd = 0.0;
+        for (x, r) in footprints.iter().zip(radii) {
+            let a = setup.disc_mean(*x, *r, with_direct);
+            self.mean_sum += f * a / pixels;
+            let c = f * 4.0 * PI * setup.intensity / (PI * r * r * photons as f64);
+            let p = a * PI * r * r / (4.0 * PI * setup.intensity);
+            sd += (c * c * photons as f64 * p * (1.0 - p)).sqrt() / pixels;
+        }
+        self.variance_sum += sd * sd;
+        self.passes += 1;
+    }
+
+    /// Expected kernel bias of the mean over pixels, and its standard deviation.
+    pub fn bias_and_sigma(
+        &self,
+        setup: &MirroredLight,
+        footprints: &[glam::DVec2],
+        with_direct: bool,
+    ) -> (f64, f64) {
+        let n = self.passes as f64;
+        let direct = if with_direct {
+            setup.direct_radiance(footprints)
+        } else {
+            0.0
+        };
+        (
+            self.mean_sum / n - setup.mirrored_radiance(footprints) - direct,
+            self.variance_sum.sqrt() / n,
+        )
     }
 }
