@@ -343,7 +343,9 @@ fn maps_load_from_hdr_and_exr_files_and_bad_files_are_named() {
 
 #[test]
 fn the_default_rule_lights_models_meant_for_a_viewer_and_leaves_lit_scenes_alone() {
-    use caustica_renderer::procedural::{caustic_pool, cornell_box, door, sphere_with_point_light};
+    use caustica_renderer::procedural::{
+        caustic_pool, cornell_box, door, gap_glass, sphere_with_point_light,
+    };
     use caustica_renderer::scene::Scene;
     let studio_lit = |desc: SceneDescription| {
         let scene = Scene::build(desc).unwrap();
@@ -359,6 +361,7 @@ fn the_default_rule_lights_models_meant_for_a_viewer_and_leaves_lit_scenes_alone
         ("cornell box", cornell_box(false)),
         ("caustic pool", caustic_pool()),
         ("door", door()),
+        ("gap and glass", gap_glass()),
         ("point-lit sphere", sphere_with_point_light(16)),
     ] {
         assert!(!studio_lit(desc), "{name}");

@@ -1,200 +1,11 @@
-//! Scenes the project generates itself: meshes (spheres, boxes, quads), the closed-form test
-//! scenes, and the bundled Cornell boxes written to `assets/` by `examples/make_assets.rs`.
+//! The bundled scenes (`assets/`, written by `examples/make_assets.rs`; a test checks the
+//! committed files are what this writes): the Cornell boxes, the material spheres, the caustic
+//! pool, the door, and the gap with glass.
 
-use crate::camera::CameraDesc;
+use super::{camera_looking, cuboid, horizontal_quad, push_quad, quad, uv_sphere};
 use crate::material::Material;
-use crate::scene::{MeshDesc, PunctualLightDesc, SceneDescription};
+use crate::scene::{MeshDesc, SceneDescription};
 use glam::{Affine3A, Quat, Vec2, Vec3};
-use std::f32::consts::PI;
-
-/// UV sphere with `segments` around and `rings` from pole to pole. With `inward`, triangles
-/// face the centre (counter-clockwise seen from inside) and normals point inward.
-pub fn uv_sphere(
-    name: &str,
-    center: Vec3,
-    radius: f32,
-    segments: u32,
-    rings: u32,
-    inward: bool,
-    material: u32,
-) -> MeshDesc {
-    let mut positions = Vec::new();
-    let mut normals = Vec::new();
-    let mut uvs = Vec::new();
-    for r in 0..=rings {
-        let theta = PI * r as f32 / rings as f32;
-        for s in 0..=segments {
-            let phi = 2.0 * PI * s as f32 / segments as f32;
-            let n = Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                -theta.sin() * phi.sin(),
-            );
-            positions.push(center + radius * n);
-            normals.push(if inward { -n } else { n });
-            uvs.push(Vec2::new(
-                s as f32 / segments as f32,
-                r as f32 / rings as f32,
-            ));
-        }
-    }
-    let mut indices = Vec::new();
-    let row = segments + 1;
-    for r in 0..rings {
-        for s in 0..segments {
-            let (a, b, c, d) = (
-                r * row + s,
-                (r + 1) * row + s,
-                (r + 1) * row + s + 1,
-                r * row + s + 1,
-            );
-            // Counter-clockwise seen from outside; the poles' zero-area triangles are skipped.
-            let mut tris = Vec::new();
-            if r != 0 {
-                tris.push([a, b, d]);
-            }
-            if r != rings - 1 {
-                tris.push([d, b, c]);
-            }
-            for mut t in tris {
-                if inward {
-                    t.swap(1, 2);
-                }
-                indices.extend_from_slice(&t);
-            }
-        }
-    }
-    MeshDesc {
-        name: name.into(),
-        positions,
-        normals: Some(normals),
-        uvs: Some(uvs),
-        uvs1: None,
-        colors: None,
-        indices,
-        material,
-    }
-}
-
-/// Quad p0 p1 p2 p3, counter-clockwise seen from its front.
-pub fn quad(name: &str, p: [Vec3; 4], material: u32) -> MeshDesc {
-    MeshDesc {
-        name: name.into(),
-        positions: p.to_vec(),
-        normals: None,
-        uvs: Some(vec![
-            Vec2::new(0.0, 1.0),
-            Vec2::new(1.0, 1.0),
-            Vec2::new(1.0, 0.0),
-            Vec2::new(0.0, 0.0),
-        ]),
-        uvs1: None,
-        colors: None,
-        indices: vec![0, 1, 2, 0, 2, 3],
-        material,
-    }
-}
-
-/// A horizontal rectangle at height `y` over [min.x, max.x] x [min.y, max.y] in x and z,
-/// facing up (+y) or down.
-pub fn horizontal_quad(
-    name: &str,
-    y: f32,
-    min: Vec2,
-    max: Vec2,
-    up: bool,
-    material: u32,
-) -> MeshDesc {
-    let (x0, z0, x1, z1) = (min.x, min.y, max.x, max.y);
-    let corners = if up {
-        [[x0, z1], [x1, z1], [x1, z0], [x0, z0]]
-    } else {
-        [[x0, z0], [x1, z0], [x1, z1], [x0, z1]]
-    };
-    quad(name, corners.map(|[x, z]| Vec3::new(x, y, z)), material)
-}
-
-/// Appends quad p0 p1 p2 p3 (counter-clockwise seen from its front) as two triangles.
-fn push_quad(mesh: &mut MeshDesc, p: [Vec3; 4]) {
-    let base = mesh.positions.len() as u32;
-    mesh.positions.extend_from_slice(&p);
-    mesh.indices
-        .extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
-}
-
-/// The unit cube [-0.5, 0.5]^3 transformed by `xf`, faces outward.
-pub fn cuboid(name: &str, xf: Affine3A, material: u32) -> MeshDesc {
-    // Each face's corners in units of half the edge, counter-clockwise seen from outside.
-    #[rustfmt::skip]
-    const FACES: [[[f32; 3]; 4]; 6] = [
-        [[-1., -1., 1.], [1., -1., 1.], [1., 1., 1.], [-1., 1., 1.]], // +z
-        [[1., -1., -1.], [-1., -1., -1.], [-1., 1., -1.], [1., 1., -1.]], // -z
-        [[1., -1., 1.], [1., -1., -1.], [1., 1., -1.], [1., 1., 1.]], // +x
-        [[-1., -1., -1.], [-1., -1., 1.], [-1., 1., 1.], [-1., 1., -1.]], // -x
-        [[-1., 1., 1.], [1., 1., 1.], [1., 1., -1.], [-1., 1., -1.]], // +y
-        [[-1., -1., -1.], [1., -1., -1.], [1., -1., 1.], [-1., -1., 1.]], // -y
-    ];
-    let mut mesh = MeshDesc {
-        name: name.into(),
-        material,
-        ..Default::default()
-    };
-    for face in FACES {
-        push_quad(
-            &mut mesh,
-            face.map(|c| xf.transform_point3(Vec3::from(c) * 0.5)),
-        );
-    }
-    mesh
-}
-
-pub fn camera_looking(from: Vec3, to: Vec3, yfov_degrees: f32) -> CameraDesc {
-    let rotation = Quat::from_rotation_arc(Vec3::NEG_Z, (to - from).normalize());
-    CameraDesc::perspective(
-        Affine3A::from_rotation_translation(rotation, from),
-        yfov_degrees.to_radians(),
-    )
-}
-
-/// The unit sphere about the origin, facing inward, with material 0: the enclosure of the
-/// closed-form scenes.
-fn enclosing_unit_sphere(segments: u32) -> MeshDesc {
-    uv_sphere("sphere", Vec3::ZERO, 1.0, segments, segments / 2, true, 0)
-}
-
-/// Closed form: inside a sphere of radius 1 and diffuse albedo 0.5, a point light of intensity
-/// pi at the centre. Direct irradiance is pi everywhere, and the enclosure's interreflection
-/// gives L = rho E / (pi (1 - rho)) = 1 in every direction.
-pub fn sphere_with_point_light(segments: u32) -> SceneDescription {
-    SceneDescription {
-        name: "sphere-point-light".into(),
-        meshes: vec![enclosing_unit_sphere(segments)],
-        materials: vec![Material::diffuse(Vec3::splat(0.5))],
-        lights: vec![PunctualLightDesc::Point {
-            position: Vec3::ZERO,
-            intensity: Vec3::splat(PI),
-        }],
-        camera: Some(camera_looking(Vec3::ZERO, Vec3::NEG_Z, 60.0)),
-        ..Default::default()
-    }
-}
-
-/// Closed form: inside a closed sphere that emits `le` and reflects diffusely with albedo
-/// `rho`, radiance is le / (1 - rho) everywhere (the Neumann series of a uniform enclosure).
-pub fn emissive_sphere(le: f32, rho: f32, segments: u32) -> SceneDescription {
-    let m = Material::emitter(Vec3::splat(le), Vec3::splat(rho));
-    SceneDescription {
-        name: "emissive-sphere".into(),
-        meshes: vec![enclosing_unit_sphere(segments)],
-        materials: vec![m],
-        camera: Some(camera_looking(
-            Vec3::new(0.1, 0.2, 0.3),
-            Vec3::new(0.5, 0.0, -1.0),
-            60.0,
-        )),
-        ..Default::default()
-    }
-}
 
 /// The Cornell box: white, red and green diffuse walls in [-1, 1] x [0, 2] x [-1, 1], a square
 /// area light under the ceiling, and two blocks; with `glass`, a smooth glass sphere (ior 1.5)
@@ -270,19 +81,6 @@ pub fn cornell_box(glass: bool) -> SceneDescription {
     }
 }
 
-/// Every mesh of a description scaled by `s` about the origin, camera included.
-pub fn scaled(mut desc: SceneDescription, s: f32) -> SceneDescription {
-    for m in &mut desc.meshes {
-        for p in &mut m.positions {
-            *p *= s;
-        }
-    }
-    if let Some(c) = &mut desc.camera {
-        c.camera_to_world.translation *= s;
-    }
-    desc
-}
-
 /// The scenes shipped in `assets/`, as (file name, glTF text).
 pub fn bundled_assets() -> Vec<(&'static str, String)> {
     use crate::scene::gltf::export::to_gltf_string;
@@ -291,6 +89,7 @@ pub fn bundled_assets() -> Vec<(&'static str, String)> {
         ("cornell-glass.gltf", to_gltf_string(&cornell_box(true))),
         ("caustic-pool.gltf", to_gltf_string(&caustic_pool())),
         ("door.gltf", to_gltf_string(&door())),
+        ("gap-glass.gltf", to_gltf_string(&gap_glass())),
         ("material-spheres.gltf", to_gltf_string(&material_spheres())),
     ]
 }
@@ -514,4 +313,76 @@ pub fn door() -> SceneDescription {
         camera: Some(camera_looking(v(-1.8, 1.5, 1.7), v(1.6, 0.5, -0.3), 60.0)),
         ..Default::default()
     }
+}
+
+/// What each estimator fails alone: a room lit only through a narrow gap in a partition from
+/// a closet whose light faces the gap, with a slab of rippled glass on low feet where the beam
+/// through the gap falls. The floor under the slab is lit through the gap and the glass and
+/// seen through the glass (a caustic seen through glass, which only merges sample), and the
+/// rest of the room by light that passed the gap (which photons reach rarely and Metropolis
+/// chains keep once found). The camera sees the room, not the closet.
+pub fn gap_glass() -> SceneDescription {
+    let white = Material::diffuse(Vec3::new(0.7, 0.7, 0.68)).named("wall");
+    let floor = Material::diffuse(Vec3::new(0.75, 0.72, 0.65)).named("floor");
+    let glass = Material::glass(1.5).named("rippled glass");
+    let light = Material::emitter(Vec3::new(400.0, 370.0, 320.0), Vec3::ZERO).named("light");
+    let v = Vec3::new;
+    let slab = |name: &str, lo: Vec3, hi: Vec3, material: u32| {
+        cuboid(
+            name,
+            Affine3A::from_scale_rotation_translation(hi - lo, Quat::IDENTITY, 0.5 * (lo + hi)),
+            material,
+        )
+    };
+    // The room is x in [-2, 2], the partition at x = 2, the closet behind it to x = 3;
+    // z in [-2, 2], 2.5 high. The gap is 4 cm wide, floor to ceiling, at z = 0.
+    let (x0, xp, x1, z, h, t) = (-2.0, 2.0, 3.0, 2.0, 2.5, 0.1);
+    let gap = 0.02;
+    let mut glass_slab = rippled_slab("glass", 0.8, 0.2, 0.4, 64, 2);
+    for p in &mut glass_slab.positions {
+        *p += v(1.0, 0.0, 0.0);
+    }
+    let meshes = vec![
+        slab("floor", v(x0 - t, -t, -z - t), v(x1 + t, 0.0, z + t), 1),
+        slab("ceiling", v(x0 - t, h, -z - t), v(x1 + t, h + t, z + t), 0),
+        slab("wall -z", v(x0 - t, 0.0, -z - t), v(x1 + t, h, -z), 0),
+        slab("wall +z", v(x0 - t, 0.0, z), v(x1 + t, h, z + t), 0),
+        slab("wall near end", v(x0 - t, 0.0, -z), v(x0, h, z), 0),
+        slab("closet back", v(x1, 0.0, -z), v(x1 + t, h, z), 0),
+        slab("partition -z", v(xp, 0.0, -z), v(xp + t, h, -gap), 0),
+        slab("partition +z", v(xp, 0.0, gap), v(xp + t, h, z), 0),
+        glass_slab,
+        // Four feet hold the slab 0.2 above the floor.
+        slab("foot 1", v(0.25, 0.0, -0.75), v(0.3, 0.2, -0.7), 0),
+        slab("foot 2", v(1.7, 0.0, -0.75), v(1.75, 0.2, -0.7), 0),
+        slab("foot 3", v(0.25, 0.0, 0.7), v(0.3, 0.2, 0.75), 0),
+        slab("foot 4", v(1.7, 0.0, 0.7), v(1.75, 0.2, 0.75), 0),
+        // The light on the closet's back wall, high, facing the gap.
+        quad_facing_neg_x("light", x1 - 0.01, 1.7, 2.3, -0.4, 0.4, 3),
+    ];
+    SceneDescription {
+        name: "gap-glass".into(),
+        meshes,
+        materials: vec![white, floor, glass, light],
+        camera: Some(camera_looking(v(-1.2, 1.5, 1.6), v(1.1, 0.3, -0.1), 55.0)),
+        ..Default::default()
+    }
+}
+
+/// A rectangle in the plane x = `x`, over y in [y0, y1] and z in [z0, z1], facing -x.
+fn quad_facing_neg_x(
+    name: &str,
+    x: f32,
+    y0: f32,
+    y1: f32,
+    z0: f32,
+    z1: f32,
+    material: u32,
+) -> MeshDesc {
+    let v = Vec3::new;
+    quad(
+        name,
+        [v(x, y0, z0), v(x, y0, z1), v(x, y1, z1), v(x, y1, z0)],
+        material,
+    )
 }
