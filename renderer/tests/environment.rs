@@ -157,10 +157,11 @@ fn every_integrator_reproduces_the_irradiance_of_a_patch_environment() {
     let exact = ALBEDO as f64 / PI * irradiance(n_map);
     // The photon mappers' direct light is next-event estimation, as the path tracer's; their
     // photons from the environment are checked by the mirror test below.
-    let cases: [(&str, common::Params, u64); 4] = [
+    let cases: [(&str, common::Params, u64); 5] = [
         ("pt", &[], 160),
         ("bdpt", &[], 160),
         ("mmlt", &[], 160),
+        ("vcm", &[], 160),
         ("sppm", &[("photons", 1000.0)], 160),
     ];
     for (integrator, params, passes) in cases {
@@ -215,7 +216,7 @@ fn light_subpaths_and_photons_from_the_environment_agree_with_the_path_tracer() 
     // a mirror wall brings light that reaches the photon mappers only as photons emitted by the
     // environment, a diffuse wall light that BDPT also gathers by connecting light subpaths
     // that start at the environment. The path tracer (its standard error held under 0.25 %)
-    // is the reference: BDPT and MMLT must agree within four standard errors and 1 %, the
+    // is the reference: BDPT, MMLT and VCM must agree within four standard errors and 1 %, the
     // photon mappers within 1 % (their pixels share photons, so the spread over pixels says
     // little of their error).
     let walls = [
@@ -230,7 +231,7 @@ fn light_subpaths_and_photons_from_the_environment_agree_with_the_path_tracer() 
             pt_se < 0.0025 * pt,
             "{wall}: the reference is too noisy: {pt} ± {pt_se}"
         );
-        for integrator in ["bdpt", "mmlt"] {
+        for integrator in ["bdpt", "mmlt", "vcm"] {
             let (image, dropped) = common::render(desc.clone(), integrator, &[], 256, 32, 9, 0);
             assert_eq!(dropped, 0, "{wall}, {integrator}");
             let (mean, se) = mean_and_error(&image);

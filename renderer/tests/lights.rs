@@ -52,7 +52,7 @@ fn uniform_plane_scene(material: Material) -> SceneDescription {
 /// Mean radiance over the image (luminance channel x) and its standard error, for each
 /// integrator that must reproduce the closed forms.
 fn render_mean(desc: SceneDescription, passes: u64) -> Vec<(&'static str, (f64, f64))> {
-    ["pt", "bdpt"]
+    ["pt", "bdpt", "vcm"]
         .into_iter()
         .map(|integrator| {
             let (image, dropped) = render(desc.clone(), integrator, &[], passes, 32, 3, 0);
