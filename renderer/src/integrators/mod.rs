@@ -13,7 +13,7 @@ pub mod path_tracer;
 pub mod pixel_pass;
 pub mod ppm;
 pub mod registry;
-mod scatter;
+pub(crate) mod scatter;
 pub mod vcm;
 
 pub use params::{

@@ -173,11 +173,7 @@ pub(crate) fn sample_direct(
     if f == Vec3::ZERO || !si.consistent(wo, wi, ls.wi) {
         return Vec3::ZERO;
     }
-    let shadow = if ls.dist.is_finite() {
-        si.spawn_ray_to(ls.p_light)
-    } else {
-        si.spawn_ray(ls.wi)
-    };
+    let shadow = si.shadow_ray(&ls);
     *rays += 1;
     if scene.occluded(&shadow) {
         return Vec3::ZERO;

@@ -140,7 +140,14 @@ pub fn material_spheres() -> SceneDescription {
 
 /// A slab of rippled glass: the top is a height field y = top + ripple(x, z) with smooth
 /// normals, the bottom a plane at `bottom`, the sides closed, over [-half, half]^2 in x and z.
-fn rippled_slab(name: &str, half: f32, bottom: f32, top: f32, n: u32, material: u32) -> MeshDesc {
+fn rippled_axis_box(
+    name: &str,
+    half: f32,
+    bottom: f32,
+    top: f32,
+    n: u32,
+    material: u32,
+) -> MeshDesc {
     let ripple = |x: f32, z: f32| {
         0.045 * (4.0 * x).sin() * (5.0 * z).cos() + 0.02 * (9.0 * x + 3.0 * z).sin()
     };
@@ -232,7 +239,7 @@ pub fn caustic_pool_tessellated(n: u32) -> SceneDescription {
         name: "caustic-pool".into(),
         meshes: vec![
             horizontal_quad("floor", 0.0, Vec2::splat(-s), Vec2::splat(s), true, 0),
-            rippled_slab("glass", 1.2, 0.35, 0.6, n, 1),
+            rippled_axis_box("glass", 1.2, 0.35, 0.6, n, 1),
             horizontal_quad(
                 "light",
                 2.6,
@@ -263,29 +270,16 @@ pub fn door() -> SceneDescription {
     let door_material = Material::diffuse(Vec3::new(0.45, 0.3, 0.2)).named("door");
     let light = Material::emitter(Vec3::new(2500.0, 2250.0, 1875.0), Vec3::ZERO).named("light");
     let v = Vec3::new;
-    // An axis-aligned slab from `lo` to `hi`.
-    let slab = |name: &str, lo: Vec3, hi: Vec3, material: u32| {
-        cuboid(
-            name,
-            Affine3A::from_scale_rotation_translation(hi - lo, Quat::IDENTITY, 0.5 * (lo + hi)),
-            material,
-        )
-    };
     let (x0, x1, xw, z, h) = (-2.0, 5.0, 2.0, 2.0, 2.5);
     let t = 0.1;
-    let meshes = vec![
-        slab("floor", v(x0 - t, -t, -z - t), v(x1 + t, 0.0, z + t), 1),
-        slab("ceiling", v(x0 - t, h, -z - t), v(x1 + t, h + t, z + t), 0),
-        slab("wall -z", v(x0 - t, 0.0, -z - t), v(x1 + t, h, -z), 0),
-        slab("wall +z", v(x0 - t, 0.0, z), v(x1 + t, h, z + t), 0),
-        slab("wall near end", v(x0 - t, 0.0, -z), v(x0, h, z), 0),
-        slab("wall far end", v(x1, 0.0, -z), v(x1 + t, h, z), 0),
+    let mut meshes = room_shell((x0, x1), z, h, t, (1, 0));
+    meshes.extend([
         // The dividing wall with a doorway in z [-0.5, 0.5], 2 m high.
-        slab("dividing wall -z", v(xw, 0.0, -z), v(xw + t, h, -0.5), 0),
-        slab("dividing wall +z", v(xw, 0.0, 0.5), v(xw + t, h, z), 0),
-        slab("lintel", v(xw, 2.0, -0.5), v(xw + t, h, 0.5), 0),
+        axis_box("dividing wall -z", v(xw, 0.0, -z), v(xw + t, h, -0.5), 0),
+        axis_box("dividing wall +z", v(xw, 0.0, 0.5), v(xw + t, h, z), 0),
+        axis_box("lintel", v(xw, 2.0, -0.5), v(xw + t, h, 0.5), 0),
         // The door fills the doorway but for a 3 cm slit along its free edge.
-        slab("door", v(xw + 0.02, 0.0, -0.5), v(xw + 0.07, 2.0, 0.47), 3),
+        axis_box("door", v(xw + 0.02, 0.0, -0.5), v(xw + 0.07, 2.0, 0.47), 3),
         uv_sphere("metal sphere", v(0.3, 0.45, -0.9), 0.45, 48, 24, false, 2),
         cuboid(
             "block",
@@ -305,7 +299,7 @@ pub fn door() -> SceneDescription {
             true,
             4,
         ),
-    ];
+    ]);
     SceneDescription {
         name: "door".into(),
         meshes,
@@ -327,39 +321,27 @@ pub fn gap_glass() -> SceneDescription {
     let glass = Material::glass(1.5).named("rippled glass");
     let light = Material::emitter(Vec3::new(400.0, 370.0, 320.0), Vec3::ZERO).named("light");
     let v = Vec3::new;
-    let slab = |name: &str, lo: Vec3, hi: Vec3, material: u32| {
-        cuboid(
-            name,
-            Affine3A::from_scale_rotation_translation(hi - lo, Quat::IDENTITY, 0.5 * (lo + hi)),
-            material,
-        )
-    };
     // The room is x in [-2, 2], the partition at x = 2, the closet behind it to x = 3;
     // z in [-2, 2], 2.5 high. The gap is 4 cm wide, floor to ceiling, at z = 0.
     let (x0, xp, x1, z, h, t) = (-2.0, 2.0, 3.0, 2.0, 2.5, 0.1);
     let gap = 0.02;
-    let mut glass_slab = rippled_slab("glass", 0.8, 0.2, 0.4, 64, 2);
+    let mut glass_slab = rippled_axis_box("glass", 0.8, 0.2, 0.4, 64, 2);
     for p in &mut glass_slab.positions {
         *p += v(1.0, 0.0, 0.0);
     }
-    let meshes = vec![
-        slab("floor", v(x0 - t, -t, -z - t), v(x1 + t, 0.0, z + t), 1),
-        slab("ceiling", v(x0 - t, h, -z - t), v(x1 + t, h + t, z + t), 0),
-        slab("wall -z", v(x0 - t, 0.0, -z - t), v(x1 + t, h, -z), 0),
-        slab("wall +z", v(x0 - t, 0.0, z), v(x1 + t, h, z + t), 0),
-        slab("wall near end", v(x0 - t, 0.0, -z), v(x0, h, z), 0),
-        slab("closet back", v(x1, 0.0, -z), v(x1 + t, h, z), 0),
-        slab("partition -z", v(xp, 0.0, -z), v(xp + t, h, -gap), 0),
-        slab("partition +z", v(xp, 0.0, gap), v(xp + t, h, z), 0),
+    let mut meshes = room_shell((x0, x1), z, h, t, (1, 0));
+    meshes.extend([
+        axis_box("partition -z", v(xp, 0.0, -z), v(xp + t, h, -gap), 0),
+        axis_box("partition +z", v(xp, 0.0, gap), v(xp + t, h, z), 0),
         glass_slab,
         // Four feet hold the slab 0.2 above the floor.
-        slab("foot 1", v(0.25, 0.0, -0.75), v(0.3, 0.2, -0.7), 0),
-        slab("foot 2", v(1.7, 0.0, -0.75), v(1.75, 0.2, -0.7), 0),
-        slab("foot 3", v(0.25, 0.0, 0.7), v(0.3, 0.2, 0.75), 0),
-        slab("foot 4", v(1.7, 0.0, 0.7), v(1.75, 0.2, 0.75), 0),
+        axis_box("foot 1", v(0.25, 0.0, -0.75), v(0.3, 0.2, -0.7), 0),
+        axis_box("foot 2", v(1.7, 0.0, -0.75), v(1.75, 0.2, -0.7), 0),
+        axis_box("foot 3", v(0.25, 0.0, 0.7), v(0.3, 0.2, 0.75), 0),
+        axis_box("foot 4", v(1.7, 0.0, 0.7), v(1.75, 0.2, 0.75), 0),
         // The light on the closet's back wall, high, facing the gap.
         quad_facing_neg_x("light", x1 - 0.01, 1.7, 2.3, -0.4, 0.4, 3),
-    ];
+    ]);
     SceneDescription {
         name: "gap-glass".into(),
         meshes,
@@ -385,4 +367,38 @@ fn quad_facing_neg_x(
         [v(x, y0, z0), v(x, y0, z1), v(x, y1, z1), v(x, y1, z0)],
         material,
     )
+}
+
+/// An axis-aligned box from corner `lo` to corner `hi`.
+fn axis_box(name: &str, lo: Vec3, hi: Vec3, material: u32) -> MeshDesc {
+    cuboid(
+        name,
+        Affine3A::from_scale_rotation_translation(hi - lo, Quat::IDENTITY, 0.5 * (lo + hi)),
+        material,
+    )
+}
+
+/// A closed room of walls `t` thick around x in [x0, x1], z in [-z, z], y in [0, h]: its
+/// floor of material `floor` and the rest of `wall`.
+fn room_shell(
+    (x0, x1): (f32, f32),
+    z: f32,
+    h: f32,
+    t: f32,
+    (floor, wall): (u32, u32),
+) -> Vec<MeshDesc> {
+    let v = Vec3::new;
+    vec![
+        axis_box("floor", v(x0 - t, -t, -z - t), v(x1 + t, 0.0, z + t), floor),
+        axis_box(
+            "ceiling",
+            v(x0 - t, h, -z - t),
+            v(x1 + t, h + t, z + t),
+            wall,
+        ),
+        axis_box("wall -z", v(x0 - t, 0.0, -z - t), v(x1 + t, h, -z), wall),
+        axis_box("wall +z", v(x0 - t, 0.0, z), v(x1 + t, h, z + t), wall),
+        axis_box("wall near end", v(x0 - t, 0.0, -z), v(x0, h, z), wall),
+        axis_box("wall far end", v(x1, 0.0, -z), v(x1 + t, h, z), wall),
+    ]
 }

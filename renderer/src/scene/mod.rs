@@ -176,6 +176,16 @@ impl SurfaceInteraction {
         geometric_reflection == shading_reflection
     }
 
+    /// The shadow ray of next-event estimation's sample `ls`: to its point, or along its
+    /// direction for a light at infinity.
+    pub fn shadow_ray(&self, ls: &LightLiSample) -> Ray {
+        if ls.dist.is_finite() {
+            self.spawn_ray_to(ls.p_light)
+        } else {
+            self.spawn_ray(ls.wi)
+        }
+    }
+
     pub fn light_context(&self) -> LightSampleContext {
         LightSampleContext {
             p: self.p,

@@ -87,11 +87,7 @@ pub fn connect(
             return None;
         }
         *rays += 1;
-        let shadow = if ls.dist.is_finite() {
-            si.spawn_ray_to(ls.p_light)
-        } else {
-            si.spawn_ray(ls.wi)
-        };
+        let shadow = si.shadow_ray(&ls);
         if scene.occluded(&shadow) {
             return None;
         }

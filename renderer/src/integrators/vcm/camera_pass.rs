@@ -8,12 +8,11 @@ use super::mis::{
     SubpathMis, weight_connection, weight_emission_hit, weight_merge, weight_next_event,
 };
 use super::techniques::TechniqueShares;
-use super::{Pass, light_densities};
+use super::{Pass, light_densities, scatter_with_mis};
 use crate::film::sanitize;
 use crate::integrators::PassStats;
 use crate::integrators::bdpt::connect::{geometry_term, visible};
 use crate::integrators::bdpt::vertex::Vertex;
-use crate::integrators::scatter;
 use crate::material::TransportMode;
 use crate::sampling::sampler::SampleSource;
 use glam::{Vec2, Vec3};
@@ -90,7 +89,6 @@ pub(super) fn trace_camera_subpath(
             break;
         }
         let bsdf = scene.bsdf(&si);
-        let wo = si.shading.to_local(si.wo);
         if !bsdf.is_delta() {
             let x = Vertex::surface(si, bsdf, beta);
             let camera_vertex = CameraVertex {
@@ -127,17 +125,12 @@ pub(super) fn trace_camera_subpath(
                 }
             }
         }
-        let Some(next) = scatter(&si, &bsdf, wo, sampler, TransportMode::Radiance) else {
+        let Some(next) =
+            scatter_with_mis(w, &mut mis, &si, &bsdf, sampler, TransportMode::Radiance)
+        else {
             break;
         };
-        let delta = next.sample.is_delta;
-        let rev_pdf = if delta {
-            next.sample.pdf
-        } else {
-            bsdf.pdf(next.sample.wi, wo)
-        };
-        mis.scatter(w, next.sample.pdf, rev_pdf, si.n.dot(next.ray.d), delta);
-        specular_path &= delta;
+        specular_path &= next.sample.is_delta;
         beta *= next.weight;
         if next.sample.eta != 1.0 {
             eta_scale *= next.sample.eta * next.sample.eta;
@@ -238,11 +231,7 @@ fn next_event(
         cos_at_light,
     );
     stats.rays += 1;
-    let shadow = if ls.dist.is_finite() {
-        si.spawn_ray_to(ls.p_light)
-    } else {
-        si.spawn_ray(ls.wi)
-    };
+    let shadow = si.shadow_ray(&ls);
     if scene.occluded(&shadow) {
         return Vec3::ZERO;
     }

@@ -4,11 +4,10 @@
 
 use super::mis::{SubpathMis, weight_light_trace};
 use super::techniques::TechniqueShares;
-use super::{Pass, light_densities};
+use super::{Pass, light_densities, scatter_with_mis};
 use crate::film::sanitize;
 use crate::integrators::bdpt::connect::visible;
 use crate::integrators::bdpt::vertex::Vertex;
-use crate::integrators::scatter;
 use crate::integrators::{Cancelled, PassStats};
 use crate::light::emission::sample_le;
 use crate::material::TransportMode;
@@ -161,17 +160,11 @@ fn trace_light_subpath(
         if path_length + 2 > pass.max_path_length {
             return;
         }
-        let wo = si.shading.to_local(si.wo);
-        let Some(next) = scatter(&si, &bsdf, wo, sampler, TransportMode::Importance) else {
+        let Some(next) =
+            scatter_with_mis(w, &mut mis, &si, &bsdf, sampler, TransportMode::Importance)
+        else {
             return;
         };
-        let delta = next.sample.is_delta;
-        let rev_pdf = if delta {
-            next.sample.pdf
-        } else {
-            bsdf.pdf(next.sample.wi, wo)
-        };
-        mis.scatter(w, next.sample.pdf, rev_pdf, si.n.dot(next.ray.d), delta);
         beta *= next.weight;
         if !beta.is_finite() || beta == Vec3::ZERO {
             return;

@@ -348,6 +348,28 @@ impl Integrator for Vcm {
     }
 }
 
+/// Samples the next direction of a subpath at `si` (`scatter`) and carries its MIS quantities
+/// over the bounce (`SubpathMis::scatter`): a delta lobe's reverse density is its forward one.
+pub(super) fn scatter_with_mis(
+    w: &MisWeights,
+    mis: &mut mis::SubpathMis,
+    si: &crate::scene::SurfaceInteraction,
+    bsdf: &crate::material::Bsdf,
+    sampler: &mut impl crate::sampling::sampler::SampleSource,
+    mode: crate::material::TransportMode,
+) -> Option<crate::integrators::scatter::Scatter> {
+    let wo = si.shading.to_local(si.wo);
+    let next = crate::integrators::scatter(si, bsdf, wo, sampler, mode)?;
+    let delta = next.sample.is_delta;
+    let rev_pdf = if delta {
+        next.sample.pdf
+    } else {
+        bsdf.pdf(next.sample.wi, wo)
+    };
+    mis.scatter(w, next.sample.pdf, rev_pdf, si.n.dot(next.ray.d), delta);
+    Some(next)
+}
+
 /// The camera half of pass `pass` into `buffer`: image rows in parallel, each pixel's sampler
 /// keyed by (seed, pixel, pass) as `pixel_pass`'s, cancellation checked per row.
 fn camera_pass(
