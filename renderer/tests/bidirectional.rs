@@ -31,14 +31,7 @@ fn each_strategy_alone_converges_to_the_same_image() {
 /// 24 x 24 pixels: below 0.2 % (measured from the spread of per-pass means); we allow 1 %.
 #[test]
 fn bdpt_reproduces_the_closed_forms() {
-    for (name, desc) in [
-        ("point-lit sphere", sphere_with_point_light(64)),
-        ("emissive sphere", emissive_sphere(0.2, 0.8, 64)),
-        (
-            "point-lit sphere, orthographic camera",
-            with_orthographic_camera(sphere_with_point_light(64), 0.5),
-        ),
-    ] {
+    for (name, desc) in common::closed_form_scenes() {
         let (img, dropped) = render(desc, "bdpt", &[], 64, 24, 1, 0);
         assert_eq!(dropped, 0);
         let m = mean(&img);

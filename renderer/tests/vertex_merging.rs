@@ -5,13 +5,11 @@ use caustica_renderer::camera::Camera;
 use caustica_renderer::integrators::ppm::auto_radius;
 use caustica_renderer::integrators::vcm::{Techniques, Vcm, VcmSettings};
 use caustica_renderer::integrators::{ParamValues, RenderContext};
-use caustica_renderer::procedural::{cornell_box, emissive_sphere, sphere_with_point_light};
+use caustica_renderer::procedural::cornell_box;
 use caustica_renderer::scene::{Scene, SceneDescription};
 use std::sync::Arc;
 
-use crate::common::{
-    block_means, block_means_of, mean, render, with_orthographic_camera, z_scores,
-};
+use crate::common::{block_means, block_means_of, mean, render, z_scores};
 
 fn context(desc: SceneDescription, size: u32, seed: u64) -> RenderContext {
     let scene = Arc::new(Scene::build(desc).unwrap());
@@ -50,14 +48,7 @@ const MERGES: Techniques = Techniques {
 /// per-pass means, merges alone the noisiest); we allow 1 %.
 #[test]
 fn vcm_reproduces_the_closed_forms() {
-    for (name, desc) in [
-        ("point-lit sphere", sphere_with_point_light(64)),
-        ("emissive sphere", emissive_sphere(0.2, 0.8, 64)),
-        (
-            "emissive sphere, orthographic camera",
-            with_orthographic_camera(emissive_sphere(0.2, 0.8, 64), 0.5),
-        ),
-    ] {
+    for (name, desc) in crate::common::closed_form_scenes() {
         let (img, dropped) = render(desc.clone(), "vcm", &[], 64, 24, 1, 0);
         assert_eq!(dropped, 0);
         let m = mean(&img);

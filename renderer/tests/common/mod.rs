@@ -118,6 +118,25 @@ pub fn z_scores(a: &[(f64, f64)], b: &[(f64, f64)]) -> (Vec<f64>, f64) {
     (z, total(b) / total(a))
 }
 
+/// The foundation's closed forms, each of exact radiance 1 everywhere: inside the point-lit
+/// sphere L = 1, inside the emissive sphere Le / (1 - rho) = 1, each through the perspective
+/// and the orthographic camera.
+pub fn closed_form_scenes() -> Vec<(&'static str, SceneDescription)> {
+    use caustica_renderer::procedural::{emissive_sphere, sphere_with_point_light};
+    vec![
+        ("point-lit sphere", sphere_with_point_light(64)),
+        ("emissive sphere", emissive_sphere(0.2, 0.8, 64)),
+        (
+            "point-lit sphere, orthographic camera",
+            with_orthographic_camera(sphere_with_point_light(64), 0.5),
+        ),
+        (
+            "emissive sphere, orthographic camera",
+            with_orthographic_camera(emissive_sphere(0.2, 0.8, 64), 0.5),
+        ),
+    ]
+}
+
 /// The mean over pixels of the mean over channels.
 pub fn mean(img: &Image) -> f64 {
     img.pixels
