@@ -24,21 +24,19 @@
 mod error;
 pub mod hash_grid;
 pub mod hit_points;
+mod metropolis;
+mod photon_tracing;
 mod pixel_stats;
 
 use crate::camera::CameraDesc;
 use crate::error_estimate::ErrorEstimate;
 use crate::film::sanitize;
-use crate::geometry::luminance;
 use crate::image::Image;
-use crate::integrators::kernel_bias::{self, INNER_RADIUS_RATIO};
-use crate::integrators::scatter;
+use crate::integrators::kernel_bias;
 use crate::integrators::{
     Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PixelLayer, PlotKind, PlotSeries,
     RenderContext,
 };
-use crate::light::emission::emit_photon;
-use crate::material::TransportMode;
 use crate::sampling::sampler::Sampler;
 use glam::{DVec3, Vec2, Vec3};
 use hash_grid::HashGrid;
@@ -396,7 +394,7 @@ impl PhotonMapper {
                         return Err(Cancelled);
                     }
                     sampler.start_pixel_sample(i, pass);
-                    self.trace_photon(grid, &mut sampler, &mut gathered, &mut st);
+                    self.trace_photon(grid, &mut sampler, &mut st, &mut |d| gathered.add(&d));
                 }
                 Ok((gathered, st))
             })
@@ -420,71 +418,6 @@ impl PhotonMapper {
             *stats = *stats + *st;
         }
         Ok(merged)
-    }
-
-    fn trace_photon(
-        &self,
-        grid: &HashGrid,
-        sampler: &mut Sampler,
-        gathered: &mut Gathered,
-        st: &mut PassStats,
-    ) {
-        let scene = &*self.ctx.scene;
-        let Some((_, mut ray, mut flux)) = emit_photon(scene, sampler) else {
-            return;
-        };
-        for depth in 0..self.settings.max_depth {
-            st.rays += 1;
-            let Some(si) = scene.intersect(&ray) else {
-                break;
-            };
-            flux *= si.transmittance;
-            let bsdf = scene.bsdf(&si);
-            // Direct light is next-event estimation's: photons count from their second hit on.
-            if depth > 0 && !bsdf.is_delta() {
-                let wi = -ray.d;
-                for &c in grid.candidates(si.p) {
-                    let c = c as usize;
-                    let Some(hp) = &self.hit_points[c] else {
-                        continue;
-                    };
-                    let dist_sq = (si.p - hp.si.p).length_squared() as f64;
-                    let radius_sq = self.radius_sq(c);
-                    if dist_sq > radius_sq {
-                        continue;
-                    }
-                    let r = hp.response(wi, si.n);
-                    if r == Vec3::ZERO {
-                        continue;
-                    }
-                    let contribution = (r * flux).as_dvec3();
-                    if contribution.is_finite() && contribution.min_element() >= 0.0 {
-                        gathered.m[c] += 1;
-                        gathered.tau[c] += contribution;
-                        if dist_sq <= INNER_RADIUS_RATIO * INNER_RADIUS_RATIO * radius_sq {
-                            gathered.tau_inner[c] += contribution;
-                        }
-                    } else {
-                        st.dropped += 1;
-                    }
-                }
-            }
-            let wo = si.shading.to_local(-ray.d);
-            let Some(next) = scatter(&si, &bsdf, wo, sampler, TransportMode::Importance) else {
-                break;
-            };
-            let new_flux = flux * next.weight;
-            // Russian roulette on the change of power (pbrt-v4 SPPM, section 13.8.3).
-            let q = (1.0 - luminance(new_flux) / luminance(flux).max(f32::MIN_POSITIVE)).max(0.0);
-            if sampler.get_1d() < q {
-                break;
-            }
-            flux = new_flux / (1.0 - q);
-            if !flux.is_finite() || flux == Vec3::ZERO {
-                break;
-            }
-            ray = next.ray;
-        }
     }
 
     /// The photon-carried radiance of a PPM or SPPM pixel: tau / (pi R^2 N_emitted).

@@ -2,6 +2,7 @@
 //! (Hachisuka et al. 2008, eqs. 5-7 and 10) with the sums the error estimate needs, and what
 //! one photon pass gathered there.
 
+use super::photon_tracing::Deposit;
 use crate::integrators::kernel_bias::PassSums;
 use glam::DVec3;
 
@@ -62,6 +63,22 @@ impl Gathered {
             m: vec![0; n],
             tau: vec![DVec3::ZERO; n],
             tau_inner: vec![DVec3::ZERO; n],
+        }
+    }
+
+    /// One photon's deposit at its hit point.
+    pub(super) fn add(&mut self, d: &Deposit) {
+        self.add_scaled(d, 1.0);
+    }
+
+    /// A deposit counted once, its flux weighted by `scale` (Metropolis photons carry their
+    /// chain's normalisation).
+    pub(super) fn add_scaled(&mut self, d: &Deposit, scale: f64) {
+        let c = d.pixel as usize;
+        self.m[c] += 1;
+        self.tau[c] += d.contribution * scale;
+        if d.inner {
+            self.tau_inner[c] += d.contribution * scale;
         }
     }
 }
