@@ -29,11 +29,12 @@ fn render(
 /// is uniform. We allow 1.5 %, four standard errors plus tessellation.
 #[test]
 fn every_variant_converges_to_the_closed_forms() {
-    for integrator in ["ppm", "sppm", "pppm"] {
+    for integrator in ["ppm", "sppm", "pppm", "amcppm"] {
         let params = [("photons", 10_000.0), ("radius", 0.1)];
         let (img, dropped) = render(sphere_with_point_light(64), integrator, &params, 32, 24);
         assert_eq!(dropped, 0);
         let m = mean(&img);
+        eprintln!("{integrator}, point-lit sphere: mean {m}");
         assert!(
             (m - 1.0).abs() < 0.015,
             "{integrator}, point-lit sphere: mean {m}, exact 1"
@@ -47,15 +48,19 @@ fn every_variant_converges_to_the_closed_forms() {
     }
     // Through an orthographic camera the image sees a disc of radius 0.5 on the sphere, a
     // sixteenth of its area (a quarter above): 128 passes keep the standard error at 0.35 %.
+    // Metropolis photon paths put the photons where that disc is, at the same 128 passes.
     let desc = common::with_orthographic_camera(sphere_with_point_light(64), 0.5);
     let params = [("photons", 10_000.0), ("radius", 0.1)];
-    let (img, dropped) = render(desc, "sppm", &params, 128, 24);
-    assert_eq!(dropped, 0);
-    let m = mean(&img);
-    assert!(
-        (m - 1.0).abs() < 0.015,
-        "sppm, point-lit sphere, orthographic camera: mean {m}, exact 1"
-    );
+    for integrator in ["sppm", "amcppm"] {
+        let (img, dropped) = render(desc.clone(), integrator, &params, 128, 24);
+        assert_eq!(dropped, 0);
+        let m = mean(&img);
+        eprintln!("{integrator}, point-lit sphere, orthographic camera: mean {m}");
+        assert!(
+            (m - 1.0).abs() < 0.015,
+            "{integrator}, point-lit sphere, orthographic camera: mean {m}, exact 1"
+        );
+    }
 }
 
 #[test]
@@ -72,7 +77,7 @@ fn extreme_parameters_keep_the_image_finite_and_sensible() {
         let mut params: Vec<(&str, f64)> = base.to_vec();
         params.retain(|(k, _)| *k != name);
         params.push((name, value));
-        for integrator in ["ppm", "sppm", "pppm"] {
+        for integrator in ["ppm", "sppm", "pppm", "amcppm"] {
             let (img, dropped) = render(sphere_with_point_light(32), integrator, &params, 8, 12);
             assert_eq!(dropped, 0, "{integrator} {name} = {value}");
             let m = mean(&img);
@@ -95,7 +100,7 @@ fn a_scene_whose_light_cannot_reach_the_camera_is_black() {
     {
         *position = glam::Vec3::new(0.0, 5.0, 0.0);
     }
-    for integrator in ["ppm", "sppm", "pppm"] {
+    for integrator in ["ppm", "sppm", "pppm", "amcppm"] {
         let (img, dropped) = render(desc.clone(), integrator, &[("photons", 1000.0)], 4, 8);
         assert_eq!(
             (mean(&img), dropped),
@@ -129,7 +134,7 @@ fn photon_mappers_agree_with_the_path_tracer_on_cornell_glass() {
     let (reference, _) = render(cornell_box(true), "pt", &[], 1024, size);
     let all: Vec<usize> = (0..reference.pixels.len()).collect();
     let reference_mean = mean_luminance_of(&reference, &all);
-    for integrator in ["sppm", "ppm", "pppm"] {
+    for integrator in ["sppm", "ppm", "pppm", "amcppm"] {
         let run = |passes| {
             render(
                 cornell_box(true),

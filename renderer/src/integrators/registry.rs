@@ -75,6 +75,14 @@ static REGISTRY: &[IntegratorInfo] = &[
         bytes_per_pixel: 700,
     },
     IntegratorInfo {
+        name: "amcppm",
+        title: "SPPM with Metropolis photon paths",
+        description: "Hachisuka & Jensen 2011: photon paths from Markov chains whose target is their visibility to this pass's hit points.",
+        params: ppm::PhotonMappingSettings::PARAMS,
+        create: ppm::create_amcppm,
+        bytes_per_pixel: 700,
+    },
+    IntegratorInfo {
         name: "vcm",
         title: "Vertex connection and merging",
         description: "Georgiev et al. 2012: bidirectional connections and photon merges in one estimator, one MIS.",

@@ -24,7 +24,7 @@
 mod error;
 pub mod hash_grid;
 pub mod hit_points;
-mod metropolis;
+pub mod metropolis;
 mod photon_tracing;
 mod pixel_stats;
 
@@ -41,6 +41,7 @@ use crate::sampling::sampler::Sampler;
 use glam::{DVec3, Vec2, Vec3};
 use hash_grid::HashGrid;
 use hit_points::{HitPoint, trace_eye_path};
+use metropolis::MetropolisPhotons;
 use pixel_stats::{Gathered, PixelStats};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -163,6 +164,8 @@ pub struct PhotonMapper {
     /// Workers of the last photon pass (the threads of the pool it ran on), each of which
     /// gathered into its own buffer.
     photon_workers: usize,
+    /// Metropolis photon paths (`metropolis.rs`) in place of uniform ones.
+    metropolis: Option<MetropolisPhotons>,
 }
 
 fn create(ctx: RenderContext, variant: Variant, p: &ParamValues) -> Box<dyn Integrator> {
@@ -180,6 +183,12 @@ pub fn create_sppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
 
 pub fn create_pppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
     create(ctx, Variant::Pppm, p)
+}
+
+/// SPPM whose photon paths come from visibility chains (Hachisuka & Jensen 2011).
+pub fn create_amcppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
+    let settings = PhotonMappingSettings::from_params(p);
+    Box::new(PhotonMapper::new(ctx, Variant::Sppm, settings).with_metropolis_light_paths())
 }
 
 const PHOTON_STREAM: u64 = 0x005e_ed0f_9407_0715;
@@ -226,8 +235,20 @@ impl PhotonMapper {
             grid: None,
             grid_builds: 0,
             photon_workers: 0,
+            metropolis: None,
             ctx,
         }
+    }
+
+    /// The same photon mapper with Metropolis photon paths (`metropolis.rs`).
+    pub fn with_metropolis_light_paths(mut self) -> Self {
+        self.metropolis = Some(MetropolisPhotons::default());
+        self
+    }
+
+    /// Its Metropolis photon paths' counters, if it has them.
+    pub fn metropolis(&self) -> Option<&MetropolisPhotons> {
+        self.metropolis.as_ref()
     }
 
     pub fn initial_radius(&self) -> f64 {
@@ -399,25 +420,10 @@ impl PhotonMapper {
                 Ok((gathered, st))
             })
             .collect::<Result<_, _>>()?;
-        // Merge in chunk order, in parallel over pixels: the sums do not depend on scheduling.
-        let mut merged = Gathered::new(n);
-        merged
-            .m
-            .par_iter_mut()
-            .zip(merged.tau.par_iter_mut())
-            .zip(merged.tau_inner.par_iter_mut())
-            .enumerate()
-            .for_each(|(i, ((mi, ti), ii))| {
-                for (g, _) in &results {
-                    *mi += g.m[i];
-                    *ti += g.tau[i];
-                    *ii += g.tau_inner[i];
-                }
-            });
         for (_, st) in &results {
             *stats = *stats + *st;
         }
-        Ok(merged)
+        Ok(Gathered::merge(n, results.iter().map(|r| &r.0)))
     }
 
     /// The photon-carried radiance of a PPM or SPPM pixel: tau / (pi R^2 N_emitted).
@@ -457,6 +463,7 @@ impl Integrator for PhotonMapper {
             + size_of_val(self.hit_points.as_slice())
             + size_of_val(self.radius_history.as_slice())
             + self.grid.as_ref().map_or(0, |(g, _)| g.memory_bytes())
+            + self.metropolis.as_ref().map_or(0, |m| m.memory_bytes())
             + pass
     }
 
@@ -465,7 +472,14 @@ impl Integrator for PhotonMapper {
         let direct = self.eye_pass(pass, cancel, &mut stats)?;
         self.update_grid(pass);
         self.photon_workers = rayon::current_num_threads();
-        let gathered = self.photon_pass(pass, cancel, &mut stats)?;
+        let gathered = match self.metropolis.take() {
+            Some(mut metropolis) => {
+                let gathered = metropolis.photon_pass(self, cancel, &mut stats);
+                self.metropolis = Some(metropolis);
+                gathered?
+            }
+            None => self.photon_pass(pass, cancel, &mut stats)?,
+        };
         let alpha = self.settings.alpha;
         let photons = self.settings.photons;
         let global_radius_sq = match self.radii {
@@ -550,11 +564,13 @@ impl Integrator for PhotonMapper {
             points: self.radius_history.iter().map(|h| [h[0], f(h)]).collect(),
             point_names: Vec::new(),
         };
-        vec![
+        let mut plots = vec![
             series("mean", |h| h[1]),
             series("mean - sd", |h| h[1] - h[2]),
             series("mean + sd", |h| h[1] + h[2]),
-        ]
+        ];
+        plots.extend(self.metropolis.iter().flat_map(|m| m.plots()));
+        plots
     }
 
     fn pixel_layers(&self) -> Vec<PixelLayer> {

@@ -66,6 +66,31 @@ impl Gathered {
         }
     }
 
+    /// The sum of `parts` (the workers' gathers), in their order, in parallel over pixels: the
+    /// sums do not depend on scheduling.
+    pub(super) fn merge<'a>(
+        n: usize,
+        parts: impl Iterator<Item = &'a Gathered> + Clone + Sync,
+    ) -> Gathered {
+        use rayon::prelude::*;
+        let parts: Vec<&Gathered> = parts.collect();
+        let mut merged = Gathered::new(n);
+        merged
+            .m
+            .par_iter_mut()
+            .zip(merged.tau.par_iter_mut())
+            .zip(merged.tau_inner.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, ((mi, ti), ii))| {
+                for g in &parts {
+                    *mi += g.m[i];
+                    *ti += g.tau[i];
+                    *ii += g.tau_inner[i];
+                }
+            });
+        merged
+    }
+
     /// One photon's deposit at its hit point.
     pub(super) fn add(&mut self, d: &Deposit) {
         self.add_scaled(d, 1.0);
