@@ -474,7 +474,7 @@ impl Integrator for PhotonMapper {
         self.photon_workers = rayon::current_num_threads();
         let gathered = match self.metropolis.take() {
             Some(mut metropolis) => {
-                let gathered = metropolis.photon_pass(self, cancel, &mut stats);
+                let gathered = metropolis.photon_pass(self, pass, cancel, &mut stats);
                 self.metropolis = Some(metropolis);
                 gathered?
             }
