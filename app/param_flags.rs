@@ -134,12 +134,12 @@ mod tests {
             }
         }
         assert!(
-            help.contains("[pt, bdpt, mmlt, ppm, sppm, pppm, vcm: default 64]"),
+            help.contains("[pt, bdpt, mmlt, ppm, sppm, pppm, amcppm, vcm: default 64]"),
             "{help}"
         );
         // Where integrators describe a parameter differently, each description is shown.
         assert!(
-            help.contains("ppm, sppm, pppm: Initial gather radius")
+            help.contains("ppm, sppm, pppm, amcppm: Initial gather radius")
                 && help.contains("vcm: Merge radius"),
             "{help}"
         );
