@@ -72,19 +72,7 @@ fn bdpt_agrees_with_the_path_tracer_on_the_cornell_boxes() {
         ),
     ] {
         let (z, ratio) = agreement(&desc, ("pt", 1024), ("bdpt", 1024), 32);
-        let chi = z.iter().map(|z| z * z).sum::<f64>() / z.len() as f64;
-        let worst = z.iter().fold(0.0f64, |m, z| m.max(z.abs()));
-        eprintln!(
-            "{name}: bdpt / pt luminance {ratio:.4}, mean z^2 {chi:.3}, worst |z| {worst:.2}"
-        );
-        assert!(
-            (ratio - 1.0).abs() < 0.01,
-            "{name}: luminance ratio {ratio}"
-        );
-        assert!(
-            chi < 2.0 && worst < 4.5,
-            "{name}: mean z^2 {chi}, worst |z| {worst}"
-        );
+        common::assert_blocks_agree(&format!("{name}, bdpt / pt"), &z, ratio);
     }
 }
 

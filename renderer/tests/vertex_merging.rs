@@ -64,22 +64,11 @@ fn vcm_reproduces_the_closed_forms() {
     }
 }
 
-/// Block by block (4 x 4 pixels of 32 x 32), the differences of two estimates are noise:
-/// mean squared z-score below 2 and none beyond 4.5 (as bdpt against pt), luminance within
-/// 1 %.
+/// Block by block (4 x 4 pixels of 32 x 32), `it` agrees with `reference` as bdpt with pt
+/// (`common::assert_blocks_agree`).
 fn assert_agree(name: &str, reference: &[(f64, f64)], it: &mut Vcm, passes: u64) {
     let (z, ratio) = z_scores(reference, &block_means_of(it, passes, 32, 4));
-    let chi = z.iter().map(|z| z * z).sum::<f64>() / z.len() as f64;
-    let worst = z.iter().fold(0.0f64, |m, z| m.max(z.abs()));
-    eprintln!("{name}: luminance ratio {ratio:.4}, mean z^2 {chi:.3}, worst |z| {worst:.2}");
-    assert!(
-        (ratio - 1.0).abs() < 0.01,
-        "{name}: luminance ratio {ratio}"
-    );
-    assert!(
-        chi < 2.0 && worst < 4.5,
-        "{name}: mean z^2 {chi}, worst |z| {worst}"
-    );
+    crate::common::assert_blocks_agree(name, &z, ratio);
 }
 
 /// Connections alone are bdpt (the same techniques, weighted by the same balance heuristic
