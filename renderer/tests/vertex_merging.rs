@@ -92,11 +92,12 @@ fn connections_alone_agree_with_bdpt() {
 }
 
 /// Merges alone, and vcm, converge to the path tracer: with a radius small enough that the
-/// kernel's bias is below the noise of 1024 passes (a quarter of the automatic one, which at
-/// 32 x 32 pixels is a sixth of the box) they agree with pt block by block, on the diffuse box
-/// and where light reaches the floor through the glass sphere (merges' own caustic). With the
-/// automatic radius at this size both show the kernel's bias (mean z^2 6.7 to 11.8, the image
-/// 0.8 to 1.2 % dark): which is what breaking the radius's schedule would look like.
+/// kernel's bias is below the noise of 1024 passes (a quarter of the photon mappers' automatic
+/// radius, which is vcm's own) they agree with pt block by block, on the diffuse box and where
+/// light reaches the floor through the glass sphere (merges' own caustic). With the photon
+/// mappers' radius, at 32 x 32 pixels a sixth of the box, both show the kernel's bias (mean z^2
+/// 6.7 to 11.8, the image 0.8 to 1.2 % dark): which is what breaking the radius's schedule
+/// would look like.
 #[test]
 fn merges_and_vcm_converge_to_the_path_tracer() {
     for (name, desc) in [
