@@ -9,6 +9,7 @@ use std::collections::BTreeMap;
 
 /// Header attributes (written as `caustica:KEY`) of `frame`, rendered by `run`.
 ///
+/// `automatic` gives the values chosen for parameters left automatic (JSON, absent when none);
 /// `passes` and `samples_per_pixel` count passes (one sample per pixel each for pt and bdpt,
 /// one eye pass and a photon pass for the photon mappers, width x height mutations for mmlt);
 /// `samples` counts every sample the integrator took; `estimated_relmse` is the remaining
@@ -32,6 +33,19 @@ pub fn exr_metadata(run: &RunDescription, frame: &Frame) -> BTreeMap<String, Str
         ("rays".to_string(), frame.rays.to_string()),
         ("dropped_samples".to_string(), frame.dropped.to_string()),
     ]);
+    // What the integrator chose for parameters given as 0 (`caustica:parameters` keeps the
+    // 0 that was asked for), so that the run can be repeated with the same values.
+    if !frame.automatic.is_empty() {
+        let chosen: serde_json::Map<String, serde_json::Value> = frame
+            .automatic
+            .iter()
+            .map(|(name, value)| (name.to_string(), serde_json::json!(value)))
+            .collect();
+        m.insert(
+            "automatic".into(),
+            serde_json::Value::Object(chosen).to_string(),
+        );
+    }
     if let Some(e) = frame.error.as_ref() {
         m.insert("estimated_relmse".into(), format!("{:e}", e.rel_mse));
         m.insert(

@@ -28,6 +28,20 @@ fn renders_the_cornell_box_to_exr_with_metadata() {
     let params: serde_json::Value = serde_json::from_str(&meta["parameters"]).unwrap();
     assert_eq!(params["max_depth"], 64.0);
     assert!(meta["elapsed_seconds"].parse::<f64>().unwrap() > 0.0);
+    // The path tracer chooses nothing; vcm chooses its radius, which the header records
+    // beside the 0 that asked for it.
+    assert!(!meta.contains_key("automatic"));
+    let out = dir.join("vcm.exr");
+    render_ok(
+        "assets/cornell-box.gltf",
+        &out,
+        "--spp 1 --width 16 --height 16 --integrator vcm",
+    );
+    let (_, meta) = read_exr(&out).unwrap();
+    let params: serde_json::Value = serde_json::from_str(&meta["parameters"]).unwrap();
+    let chosen: serde_json::Value = serde_json::from_str(&meta["automatic"]).unwrap();
+    assert_eq!(params["radius"], 0.0);
+    assert!(chosen["radius"].as_f64().unwrap() > 0.0, "{chosen}");
     std::fs::remove_dir_all(dir).unwrap();
 }
 
