@@ -1,4 +1,4 @@
-//! The photon mappers (ppm, sppm, pppm) on scenes with closed-form radiance, at the extremes of
+//! The photon mappers (ppm, sppm, pppm, amcppm) on scenes with closed-form radiance, at the extremes of
 //! their parameters, and against the path tracer.
 
 use caustica_renderer::image::Image;
@@ -160,6 +160,47 @@ fn photon_mappers_agree_with_the_path_tracer_on_cornell_glass() {
             "{integrator}: relMSE did not shrink ({e_short} -> {e_long})"
         );
     }
+}
+
+/// The glass Cornell box with its sphere turned to a polished metal (metallic 1, roughness
+/// 0.2): a surface without a diffuse lobe, which photon mapping looks through by sampling its
+/// BSDF, with next-event estimation there, both weighted by MIS (`ppm/hit_points.rs`). Over
+/// the sphere's pixels (the mask: the sphere alone emitting, all else black) sppm's mean
+/// luminance at 1024 passes and the path tracer's at 8192 (whose seeds 11 and 12 differ by
+/// 0.2 %) agree within 2 %: measured over seeds 11 to 13, 0.992 to 0.996. Without MIS there
+/// the seeds spread from 0.93 to 1.04 (the light's highlight found by next-event estimation
+/// alone); without the direct light at the metal the ratio is 0.78, counting the emission a
+/// glossy bounce finds whole as well as next-event estimation's, 1.20.
+#[test]
+fn photon_mappers_see_through_glossy_metal_as_the_path_tracer_does() {
+    use caustica_renderer::material::Material;
+    use caustica_renderer::procedural::cornell_box;
+    let mut desc = cornell_box(true);
+    let sphere = desc
+        .materials
+        .iter()
+        .position(|m| m.name == "glass")
+        .unwrap();
+    desc.materials[sphere] = Material::metallic_roughness(glam::Vec3::splat(0.9), 1.0, 0.2);
+    let mut mask = desc.clone();
+    for (i, m) in mask.materials.iter_mut().enumerate() {
+        *m = if i == sphere {
+            Material::emitter(glam::Vec3::ONE, glam::Vec3::ZERO)
+        } else {
+            Material::diffuse(glam::Vec3::ZERO)
+        };
+    }
+    let size = 48;
+    let (mask, _) = render(mask, "pt", &[], 4, size);
+    let pixels: Vec<usize> = (0..mask.pixels.len())
+        .filter(|&i| mask.pixels[i].x > 0.5)
+        .collect();
+    assert!(pixels.len() > 100, "{} pixels", pixels.len());
+    let (reference, _) = render(desc.clone(), "pt", &[], 8192, size);
+    let (sppm, _) = render(desc, "sppm", &[("photons", 2e3)], 1024, size);
+    let ratio = mean_luminance_of(&sppm, &pixels) / mean_luminance_of(&reference, &pixels);
+    eprintln!("{} sphere pixels, luminance ratio {ratio:.4}", pixels.len());
+    assert!((ratio - 1.0).abs() < 0.02, "mean luminance ratio {ratio}");
 }
 
 #[test]

@@ -86,35 +86,15 @@ pub fn li(
     let mut depth = 0u32;
     loop {
         *rays += 1;
+        // Emission found by BSDF sampling is weighted against next-event estimation, except
+        // from the camera or a specular bounce, which next-event estimation cannot sample.
+        let bsdf_pdf = (depth > 0 && !specular_bounce).then_some(prev_bsdf_pdf);
         let Some(si) = scene.intersect(&ray) else {
-            if let Some(env) = scene.environment {
-                let le = scene.environment_radiance(ray.d);
-                let w = if depth == 0 || specular_bounce {
-                    1.0
-                } else {
-                    let light_pdf = match &scene.lights[env] {
-                        Light::Environment(e) => scene.light_sampler.pmf(env) * e.pdf_li(ray.d),
-                        _ => 0.0,
-                    };
-                    power_heuristic(1.0, prev_bsdf_pdf, 1.0, light_pdf)
-                };
-                l += beta * le * w;
-            }
+            l += beta * found_emission(scene, prev_p, ray.d, None, bsdf_pdf);
             break;
         };
         beta *= si.transmittance;
-        if let Some((light, area)) = scene.area_light(&si) {
-            let le = area.l(&scene.textures, &si.uv, si.wo);
-            if le != Vec3::ZERO {
-                let w = if depth == 0 || specular_bounce {
-                    1.0
-                } else {
-                    let light_pdf = scene.light_sampler.pmf(light) * area.pdf_li(prev_p, si.p);
-                    power_heuristic(1.0, prev_bsdf_pdf, 1.0, light_pdf)
-                };
-                l += beta * le * w;
-            }
-        }
+        l += beta * found_emission(scene, prev_p, ray.d, Some(&si), bsdf_pdf);
         if depth == max_depth {
             break;
         }
@@ -148,6 +128,46 @@ pub fn li(
         depth += 1;
     }
     l
+}
+
+/// The radiance a ray leaving `prev_p` in direction `d` finds: the emission at `si`, or the
+/// environment's when it left the scene. `bsdf_pdf` is the solid-angle density the ray was
+/// sampled with at a non-specular surface, whose emission next-event estimation also samples:
+/// then it is weighted by the power heuristic against that (Veach 1997, section 9.2); None
+/// counts it whole (a camera ray, a specular bounce).
+#[inline]
+pub(crate) fn found_emission(
+    scene: &Scene,
+    prev_p: Vec3,
+    d: Vec3,
+    si: Option<&SurfaceInteraction>,
+    bsdf_pdf: Option<f32>,
+) -> Vec3 {
+    let (le, light_pdf) = match si {
+        None => {
+            let Some(env) = scene.environment else {
+                return Vec3::ZERO;
+            };
+            let light_pdf = || match &scene.lights[env] {
+                Light::Environment(e) => scene.light_sampler.pmf(env) * e.pdf_li(d),
+                _ => 0.0,
+            };
+            (scene.environment_radiance(d), bsdf_pdf.map(|_| light_pdf()))
+        }
+        Some(si) => {
+            let Some((light, area)) = scene.area_light(si) else {
+                return Vec3::ZERO;
+            };
+            let light_pdf = || scene.light_sampler.pmf(light) * area.pdf_li(prev_p, si.p);
+            (area.l(&scene.textures, &si.uv, si.wo), bsdf_pdf.map(|_| light_pdf()))
+        }
+    };
+    match (bsdf_pdf, light_pdf) {
+        (Some(bsdf_pdf), Some(light_pdf)) if le != Vec3::ZERO => {
+            le * power_heuristic(1.0, bsdf_pdf, 1.0, light_pdf)
+        }
+        _ => le,
+    }
 }
 
 /// Next-event estimation: one light chosen by power, one point on it, weighted by MIS against

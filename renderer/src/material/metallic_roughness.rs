@@ -75,6 +75,13 @@ fn to_upper(wo: Vec3, wi: Vec3) -> (Vec3, Vec3) {
 }
 
 impl MetallicRoughnessBsdf {
+    /// Whether a lobe spreads light over the whole hemisphere (the plastic's diffuse base or
+    /// a sheen), where a glossy-only material (a metal, rough glass) has only peaks.
+    pub fn has_diffuse_lobe(&self) -> bool {
+        let (_, plastic, _) = self.weights();
+        plastic > 0.0 || self.sheen.color != Vec3::ZERO
+    }
+
     fn weights(&self) -> (f32, f32, f32) {
         let metal = self.metallic.clamp(0.0, 1.0);
         let tr = self.transmission.clamp(0.0, 1.0);

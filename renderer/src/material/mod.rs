@@ -81,6 +81,16 @@ impl Bsdf {
         matches!(self, Bsdf::Mirror(_) | Bsdf::Dielectric(_))
     }
 
+    /// True when a lobe spreads light over the whole hemisphere (diffuse, or the diffuse
+    /// base of a plastic): where photon mapping leaves its hit points (`ppm/hit_points.rs`).
+    pub fn has_diffuse_lobe(&self) -> bool {
+        match self {
+            Bsdf::Diffuse(_) => true,
+            Bsdf::MetallicRoughness(b) => b.has_diffuse_lobe(),
+            Bsdf::Mirror(_) | Bsdf::Dielectric(_) => false,
+        }
+    }
+
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
         match self {
             Bsdf::Diffuse(b) => b.f(wo, wi),

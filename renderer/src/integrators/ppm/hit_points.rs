@@ -1,10 +1,14 @@
 //! The eye pass of photon mapping (Hachisuka et al. 2008, section 4.1): a camera ray follows
-//! specular bounces to the first surface with a non-delta BSDF and leaves a hit point there.
-//! Emission met on the way and direct light at the hit point (next-event estimation without
-//! MIS: photons never carry direct light) form the pixel's direct estimate (DESIGN.md 4).
+//! specular and glossy bounces to the first surface with a diffuse lobe and leaves a hit point
+//! there (pbrt-v4's SPPM does the same). A glossy-only surface (metal, rough glass) gets no hit
+//! point: its BSDF's peak times the rare photon in it made the brightest fireflies of every
+//! photon mapper (DESIGN.md 4), and the path goes on by sampling the BSDF instead. Emission met
+//! on the way and direct light at each glossy surface passed (next-event estimation, the two
+//! weighted by MIS as in the path tracer) and direct light at the hit point (next-event
+//! estimation without MIS: photons never carry direct light) form the pixel's direct estimate.
 
 use crate::geometry::Ray;
-use crate::integrators::path_tracer::sample_direct;
+use crate::integrators::path_tracer::{found_emission, sample_direct};
 use crate::integrators::scatter;
 use crate::material::{Bsdf, TransportMode};
 use crate::sampling::sampler::Sampler;
@@ -48,50 +52,62 @@ impl HitPoint {
     }
 }
 
-/// Result of one eye path: emission seen through specular chains, and the hit point.
+/// Result of one eye path: the light it found on the way (module docs), and the hit point.
 pub struct EyePath {
     pub emitted: Vec3,
     pub hit_point: Option<HitPoint>,
 }
 
+/// Traces the eye path of one camera ray: `eye` draws its bounces, `nee` the direct light at
+/// the glossy surfaces it passes (module docs).
 pub fn trace_eye_path(
     scene: &Scene,
     mut ray: Ray,
-    sampler: &mut Sampler,
+    eye: &mut Sampler,
+    nee: &mut Sampler,
     max_depth: u32,
     rays: &mut u64,
 ) -> EyePath {
     let mut beta = Vec3::ONE;
     let mut emitted = Vec3::ZERO;
+    // The density of the last glossy bounce (None from the camera or a specular one), whose
+    // emission is weighted against next-event estimation at the glossy surface.
+    let mut bsdf_pdf = None;
+    let mut prev_p = ray.o;
     for depth in 0..=max_depth {
         *rays += 1;
         let Some(si) = scene.intersect(&ray) else {
-            emitted += beta * scene.environment_radiance(ray.d);
+            emitted += beta * found_emission(scene, prev_p, ray.d, None, bsdf_pdf);
             break;
         };
         beta *= si.transmittance;
-        emitted += beta * scene.emitted(&si, si.wo);
+        emitted += beta * found_emission(scene, prev_p, ray.d, Some(&si), bsdf_pdf);
         let bsdf = scene.bsdf(&si);
         let wo = si.shading.to_local(si.wo);
         if !bsdf.is_delta() {
-            let facing = if si.n.dot(si.wo) >= 0.0 { si.n } else { -si.n };
-            return EyePath {
-                emitted,
-                hit_point: Some(HitPoint {
-                    si,
-                    facing,
-                    bsdf,
-                    wo,
-                    beta,
-                }),
-            };
+            if bsdf.has_diffuse_lobe() || depth == max_depth {
+                let facing = if si.n.dot(si.wo) >= 0.0 { si.n } else { -si.n };
+                return EyePath {
+                    emitted,
+                    hit_point: Some(HitPoint {
+                        si,
+                        facing,
+                        bsdf,
+                        wo,
+                        beta,
+                    }),
+                };
+            }
+            emitted += beta * sample_direct(scene, &si, &bsdf, wo, nee, rays, true);
         }
         if depth == max_depth {
             break;
         }
-        let Some(next) = scatter(&si, &bsdf, wo, sampler, TransportMode::Radiance) else {
+        let Some(next) = scatter(&si, &bsdf, wo, eye, TransportMode::Radiance) else {
             break;
         };
+        bsdf_pdf = (!next.sample.is_delta).then_some(next.sample.pdf);
+        prev_p = si.p;
         beta *= next.weight;
         if !beta.is_finite() || beta == Vec3::ZERO {
             break;

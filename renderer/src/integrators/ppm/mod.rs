@@ -367,6 +367,7 @@ impl PhotonMapper {
                         scene,
                         camera.generate_ray(film),
                         &mut eye,
+                        &mut sampler,
                         max_depth,
                         &mut row.rays,
                     );
