@@ -25,7 +25,6 @@ use super::photon_tracing::Deposit;
 use super::pixel_stats::Gathered;
 use crate::integrators::{Cancelled, PassStats, PlotKind, PlotSeries};
 use crate::sampling::pss::{LIGHT_STREAM, PssSampler};
-use crate::sampling::sampler::Sampler;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The acceptance the mutation size adapts towards (Roberts, Gelman & Gilks 1997).
@@ -168,7 +167,6 @@ impl MetropolisPhotons {
     pub(super) fn photon_pass(
         &mut self,
         mapper: &PhotonMapper,
-        pass: u64,
         cancel: &AtomicBool,
         stats: &mut PassStats,
     ) -> Result<Gathered, Cancelled> {
@@ -183,7 +181,7 @@ impl MetropolisPhotons {
             .iter()
             .map(|c| (c.mutations, c.accepted))
             .collect();
-        let gathered = mapper.metropolis_photon_pass(&mut self.chains, pass, cancel, stats)?;
+        let gathered = mapper.metropolis_photon_pass(&mut self.chains, cancel, stats)?;
         self.passes += 1;
         let sum = |f: fn(&VisibilityChain) -> u64| self.chains.iter().map(f).sum::<u64>();
         let (uniform, visible) = (sum(|c| c.uniform), sum(|c| c.uniform_visible));
@@ -217,6 +215,23 @@ impl MetropolisPhotons {
             }
         }
         Ok(gathered)
+    }
+
+    /// The run's counters for `--stats`: uniform samples and the visible ones, mutations
+    /// and the accepted ones, and each chain's current mutation size.
+    pub(super) fn statistics(&self) -> serde_json::Value {
+        let sum = |f: fn(&VisibilityChain) -> u64| self.chains.iter().map(f).sum::<u64>();
+        let ratio = |a: u64, b: u64| if b == 0 { 0.0 } else { a as f64 / b as f64 };
+        let (mutations, accepted) = (sum(|c| c.mutations), sum(|c| c.accepted));
+        serde_json::json!({
+            "uniform_samples": self.uniform,
+            "uniform_visible": self.uniform_visible,
+            "visible_fraction": ratio(self.uniform_visible, self.uniform),
+            "mutations": mutations,
+            "accepted": accepted,
+            "acceptance": ratio(accepted, mutations),
+            "mutation_sizes": self.chains.iter().map(|c| c.mutation_size).collect::<Vec<_>>(),
+        })
     }
 
     /// The chains' plots: visible fraction, acceptance and mutation size, exchanges.
@@ -260,7 +275,6 @@ impl PhotonMapper {
     pub(super) fn metropolis_photon_pass(
         &self,
         chains: &mut [VisibilityChain],
-        pass: u64,
         cancel: &AtomicBool,
         stats: &mut PassStats,
     ) -> Result<Gathered, Cancelled> {
@@ -289,16 +303,9 @@ impl PhotonMapper {
                 let scale = chain.scale();
                 gathered.tau.iter_mut().for_each(|t| *t *= scale);
                 gathered.tau_inner.iter_mut().for_each(|t| *t *= scale);
-                // The radii shrink by the count of uniform photons these stand for (m times
-                // the scale, rounded at random so that its expectation is kept), as SPPM's
-                // with uniform photons would: a chain lingering over a few hit points must not
-                // collapse their radii (counting its photons as they fall, the door's image
-                // stopped converging, slope -0.02 over 30 s).
-                let mut rounding = Sampler::new(self.ctx.seed ^ CHAIN_STREAM);
-                for (i, m) in gathered.m.iter_mut().enumerate().filter(|(_, m)| **m > 0) {
-                    rounding.start_pixel_sample(i as u64, pass * count + c);
-                    *m = (f64::from(*m) * scale + f64::from(rounding.get_1d())).floor() as u32;
-                }
+                // The radii shrink by the chain's photons as they fall (each a sample of the
+                // density; Hachisuka & Jensen 2011 count them so): denser photons where the
+                // camera looks shrink the radii faster, which is the bias half of the gain.
                 Ok((gathered, st))
             })
             .collect::<Result<_, _>>()?;

@@ -475,7 +475,7 @@ impl Integrator for PhotonMapper {
         self.photon_workers = rayon::current_num_threads();
         let gathered = match self.metropolis.take() {
             Some(mut metropolis) => {
-                let gathered = metropolis.photon_pass(self, pass, cancel, &mut stats);
+                let gathered = metropolis.photon_pass(self, cancel, &mut stats);
                 self.metropolis = Some(metropolis);
                 gathered?
             }
@@ -545,6 +545,10 @@ impl Integrator for PhotonMapper {
 
     fn error_estimate(&self) -> Option<ErrorEstimate> {
         self.estimate_error()
+    }
+
+    fn statistics(&self) -> Option<serde_json::Value> {
+        self.metropolis.as_ref().map(|m| m.statistics())
     }
 
     fn set_live_param(&mut self, name: &str, value: f64) {

@@ -27,9 +27,6 @@ impl PixelStats {
     pub(super) fn add_photons(&mut self, m: u32, tau_m: DVec3, alpha: f64, floor_sq: f64) {
         self.photons_counted += u64::from(m);
         if m == 0 {
-            // Flux without a count (Metropolis photons that stand for less than one uniform
-            // photon, `metropolis.rs`) adds to tau and leaves the radius.
-            self.tau += tau_m;
             return;
         }
         let (n, mf) = (self.n, f64::from(m));
