@@ -32,6 +32,10 @@ pub struct ReferenceArgs {
     /// Write the run's statistics as JSON.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
+    /// Integrator with its defaults, in place of the one the scene's survey picks (for a
+    /// scene whose best estimator the survey cannot yet tell).
+    #[arg(long, value_parser = crate::render::integrator_names())]
+    pub integrator: Option<String>,
 }
 
 pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
@@ -49,12 +53,21 @@ pub fn run(args: &ReferenceArgs) -> Result<(), crate::render::Failure> {
     let scene = args.scene_flags.load(&args.scene)?;
     let (width, height) = args.size.resolve(scene.camera.aspect);
     let survey = survey::survey_at(&scene, width, height);
-    let r = survey.reference(width, height, &scene.camera);
-    eprintln!("reference with {}: {}", r.integrator, r.reasons.join("; "));
+    let mut r = survey.reference(width, height, &scene.camera);
+    match &args.integrator {
+        Some(name) => {
+            eprintln!(
+                "reference with {name}: chosen by --integrator (the survey's: {})",
+                r.integrator
+            );
+            r.params.clear();
+        }
+        None => eprintln!("reference with {}: {}", r.integrator, r.reasons.join("; ")),
+    }
     let render = RenderArgs {
         scene: args.scene.clone(),
         output: args.output.clone(),
-        integrator: r.integrator.to_string(),
+        integrator: args.integrator.clone().unwrap_or(r.integrator.to_string()),
         spp: None,
         time: Some(args.time),
         until_error: None,

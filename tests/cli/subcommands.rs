@@ -117,6 +117,12 @@ fn info_recommends_and_reference_renders_with_the_recommendation() {
     let (_, meta) = read_exr(&out).unwrap();
     assert_eq!(meta["integrator"], "sppm");
     assert!(meta["estimated_relmse"].parse::<f64>().unwrap() > 0.0);
+    let o = run(&format!(
+        "reference assets/caustic-pool.gltf -o {} --time 1 --width 32 --integrator bdpt",
+        out.display()
+    ));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(read_exr(&out).unwrap().1["integrator"], "bdpt");
     let o = run("reference assets/door.gltf -o x.png --time 1");
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     std::fs::remove_dir_all(dir).unwrap();

@@ -159,7 +159,10 @@ pub(crate) fn found_emission(
                 return Vec3::ZERO;
             };
             let light_pdf = || scene.light_sampler.pmf(light) * area.pdf_li(prev_p, si.p);
-            (area.l(&scene.textures, &si.uv, si.wo), bsdf_pdf.map(|_| light_pdf()))
+            (
+                area.l(&scene.textures, &si.uv, si.wo),
+                bsdf_pdf.map(|_| light_pdf()),
+            )
         }
     };
     match (bsdf_pdf, light_pdf) {
