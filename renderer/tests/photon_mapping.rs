@@ -162,6 +162,17 @@ fn photon_mappers_agree_with_the_path_tracer_on_cornell_glass() {
     }
 }
 
+/// The glass Cornell box and the index of its sphere's material, for tests to change it.
+fn cornell_glass_and_its_sphere() -> (SceneDescription, usize) {
+    let desc = caustica_renderer::procedural::cornell_box(true);
+    let sphere = desc
+        .materials
+        .iter()
+        .position(|m| m.name == "glass")
+        .unwrap();
+    (desc, sphere)
+}
+
 /// The glass Cornell box with its sphere turned to a polished metal (metallic 1, roughness
 /// 0.2): a surface without a diffuse lobe, which photon mapping looks through by sampling its
 /// BSDF, with next-event estimation there, both weighted by MIS (`ppm/hit_points.rs`). Over
@@ -174,13 +185,7 @@ fn photon_mappers_agree_with_the_path_tracer_on_cornell_glass() {
 #[test]
 fn photon_mappers_see_through_glossy_metal_as_the_path_tracer_does() {
     use caustica_renderer::material::Material;
-    use caustica_renderer::procedural::cornell_box;
-    let mut desc = cornell_box(true);
-    let sphere = desc
-        .materials
-        .iter()
-        .position(|m| m.name == "glass")
-        .unwrap();
+    let (mut desc, sphere) = cornell_glass_and_its_sphere();
     desc.materials[sphere] = Material::metallic_roughness(glam::Vec3::splat(0.9), 1.0, 0.2);
     let mut mask = desc.clone();
     for (i, m) in mask.materials.iter_mut().enumerate() {
@@ -209,12 +214,7 @@ fn photons_through_absorbing_glass_agree_with_the_path_tracer() {
     // sphere's image are tinted by Beer-Lambert transmittance, which the photon pass must
     // apply as the camera paths do.
     use caustica_renderer::procedural::cornell_box;
-    let mut desc = cornell_box(true);
-    let glass = desc
-        .materials
-        .iter()
-        .position(|m| m.name == "glass")
-        .unwrap();
+    let (mut desc, glass) = cornell_glass_and_its_sphere();
     desc.materials[glass].absorption = glam::Vec3::new(2.0, 0.7, 0.1);
     let size = 48;
     let (reference, _) = render(desc.clone(), "pt", &[], 1024, size);
