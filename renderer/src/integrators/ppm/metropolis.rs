@@ -278,40 +278,22 @@ impl PhotonMapper {
         cancel: &AtomicBool,
         stats: &mut PassStats,
     ) -> Result<Gathered, Cancelled> {
-        use rayon::prelude::*;
-        let n = self.pixels.len();
-        let Some((grid, _)) = &self.grid else {
-            return Ok(Gathered::new(n));
-        };
-        let photons = self.settings.photons;
-        let count = chains.len().max(1) as u64;
-        let results: Vec<(Gathered, PassStats)> = chains
-            .par_iter_mut()
-            .enumerate()
-            .map(|(c, chain)| {
-                let c = c as u64;
-                let mut gathered = Gathered::new(n);
-                let mut st = PassStats::default();
-                chain.current.clear();
-                (chain.uniform, chain.uniform_visible, chain.chain_photons) = (0, 0, 0);
-                for i in (c * photons / count)..((c + 1) * photons / count) {
-                    if i % 1024 == 0 && cancel.load(Ordering::Relaxed) {
-                        return Err(Cancelled);
-                    }
-                    chain.iterate(self, grid, &mut gathered, &mut st);
+        self.photon_pass_over(chains, stats, |chain, grid, photons, gathered, st| {
+            chain.current.clear();
+            (chain.uniform, chain.uniform_visible, chain.chain_photons) = (0, 0, 0);
+            for i in photons {
+                if i % 1024 == 0 && cancel.load(Ordering::Relaxed) {
+                    return Err(Cancelled);
                 }
-                let scale = chain.scale();
-                gathered.tau.iter_mut().for_each(|t| *t *= scale);
-                gathered.tau_inner.iter_mut().for_each(|t| *t *= scale);
-                // The radii shrink by the chain's photons as they fall (each a sample of the
-                // density; Hachisuka & Jensen 2011 count them so): denser photons where the
-                // camera looks shrink the radii faster, which is the bias half of the gain.
-                Ok((gathered, st))
-            })
-            .collect::<Result<_, _>>()?;
-        for (_, st) in &results {
-            *stats = *stats + *st;
-        }
-        Ok(Gathered::merge(n, results.iter().map(|r| &r.0)))
+                chain.iterate(self, grid, gathered, st);
+            }
+            let scale = chain.scale();
+            gathered.tau.iter_mut().for_each(|t| *t *= scale);
+            gathered.tau_inner.iter_mut().for_each(|t| *t *= scale);
+            // The radii shrink by the chain's photons as they fall (each a sample of the
+            // density; Hachisuka & Jensen 2011 count them so): denser photons where the
+            // camera looks shrink the radii faster, which is the bias half of the gain.
+            Ok(())
+        })
     }
 }

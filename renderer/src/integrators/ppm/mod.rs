@@ -399,25 +399,51 @@ impl PhotonMapper {
         cancel: &AtomicBool,
         stats: &mut PassStats,
     ) -> Result<Gathered, Cancelled> {
+        let mut workers = vec![(); self.photon_workers.max(1)];
+        self.photon_pass_over(&mut workers, stats, |(), grid, photons, gathered, st| {
+            let mut sampler = Sampler::new(self.ctx.seed ^ PHOTON_STREAM);
+            for i in photons {
+                if i % 1024 == 0 && cancel.load(Ordering::Relaxed) {
+                    return Err(Cancelled);
+                }
+                sampler.start_pixel_sample(i, pass);
+                self.trace_photon(grid, &mut sampler, st, &mut |d| gathered.add(&d));
+            }
+            Ok(())
+        })
+    }
+
+    /// What every photon pass shares: the pass's `photons` split into one range per worker,
+    /// each worker's `work` on its range gathering apart, the gathers and counters summed in
+    /// the workers' order (so the image does not depend on scheduling).
+    fn photon_pass_over<T: Send>(
+        &self,
+        workers: &mut [T],
+        stats: &mut PassStats,
+        work: impl Fn(
+            &mut T,
+            &HashGrid,
+            std::ops::Range<u64>,
+            &mut Gathered,
+            &mut PassStats,
+        ) -> Result<(), Cancelled>
+        + Sync,
+    ) -> Result<Gathered, Cancelled> {
         let n = self.pixels.len();
         let Some((grid, _)) = &self.grid else {
             return Ok(Gathered::new(n));
         };
         let photons = self.settings.photons;
-        let chunks = self.photon_workers.max(1) as u64;
-        let results: Vec<(Gathered, PassStats)> = (0..chunks)
-            .into_par_iter()
-            .map(|c| {
+        let count = workers.len().max(1) as u64;
+        let results: Vec<(Gathered, PassStats)> = workers
+            .par_iter_mut()
+            .enumerate()
+            .map(|(c, worker)| {
+                let c = c as u64;
                 let mut gathered = Gathered::new(n);
                 let mut st = PassStats::default();
-                let mut sampler = Sampler::new(self.ctx.seed ^ PHOTON_STREAM);
-                for i in (c * photons / chunks)..((c + 1) * photons / chunks) {
-                    if i % 1024 == 0 && cancel.load(Ordering::Relaxed) {
-                        return Err(Cancelled);
-                    }
-                    sampler.start_pixel_sample(i, pass);
-                    self.trace_photon(grid, &mut sampler, &mut st, &mut |d| gathered.add(&d));
-                }
+                let range = (c * photons / count)..((c + 1) * photons / count);
+                work(worker, grid, range, &mut gathered, &mut st)?;
                 Ok((gathered, st))
             })
             .collect::<Result<_, _>>()?;
