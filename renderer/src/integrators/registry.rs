@@ -78,7 +78,7 @@ static REGISTRY: &[IntegratorInfo] = &[
         name: "amcppm",
         title: "SPPM with Metropolis photon paths",
         description: "Hachisuka & Jensen 2011: photon paths from Markov chains whose target is their visibility to this pass's hit points.",
-        params: ppm::PhotonMappingSettings::PARAMS,
+        params: ppm::PhotonMappingSettings::METROPOLIS_PARAMS,
         create: ppm::create_amcppm,
         bytes_per_pixel: 700,
     },

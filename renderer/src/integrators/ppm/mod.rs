@@ -84,38 +84,41 @@ pub struct PhotonMappingSettings {
     pub max_depth: u32,
 }
 
+const ALPHA: ParamSpec = ParamSpec::new(
+    "alpha",
+    "Share of new photons kept per pass (0, 1]: smaller shrinks the radius faster (less bias, more noise); 1 never shrinks it.",
+    2.0 / 3.0,
+    (1e-3, 1.0),
+)
+.live();
+const RADIUS: ParamSpec = ParamSpec::new(
+    "radius",
+    "Initial gather radius in scene units; 0 picks four pixel footprints at the median distance of the surfaces the camera sees.",
+    0.0,
+    (0.0, 1e6),
+)
+.automatic_at_zero();
+const PHOTONS: ParamSpec = ParamSpec::new(
+    "photons",
+    "Photons traced per pass.",
+    100_000.0,
+    (1.0, 1e7),
+)
+.integer()
+.live();
+const MAX_DEPTH: ParamSpec = ParamSpec::new(
+    "max_depth",
+    "Maximum bounces of eye paths (through specular surfaces) and of photon paths; Russian roulette ends most photons earlier.",
+    64.0,
+    (1.0, 1024.0),
+)
+.integer();
+
 impl PhotonMappingSettings {
-    pub const PARAMS: &'static [ParamSpec] = &[
-        ParamSpec::new(
-            "alpha",
-            "Share of new photons kept per pass (0, 1]: smaller shrinks the radius faster (less bias, more noise); 1 never shrinks it.",
-            2.0 / 3.0,
-            (1e-3, 1.0),
-        )
-        .live(),
-        ParamSpec::new(
-            "radius",
-            "Initial gather radius in scene units; 0 picks four pixel footprints at the median distance of the surfaces the camera sees.",
-            0.0,
-            (0.0, 1e6),
-        )
-        .automatic_at_zero(),
-        ParamSpec::new(
-            "photons",
-            "Photons traced per pass.",
-            100_000.0,
-            (1.0, 1e7),
-        )
-        .integer()
-        .live(),
-        ParamSpec::new(
-            "max_depth",
-            "Maximum bounces of eye paths (through specular surfaces) and of photon paths; Russian roulette ends most photons earlier.",
-            64.0,
-            (1.0, 1024.0),
-        )
-        .integer(),
-    ];
+    pub const PARAMS: &'static [ParamSpec] = &[ALPHA, RADIUS, PHOTONS, MAX_DEPTH];
+    /// amcppm's: the photon mappers' and the chains' large-step probability.
+    pub const METROPOLIS_PARAMS: &'static [ParamSpec] =
+        &[ALPHA, RADIUS, PHOTONS, MAX_DEPTH, metropolis::LARGE_STEP];
 
     pub fn from_params(p: &ParamValues) -> Self {
         crate::integrators::params::read_settings(Self::PARAMS, p)
@@ -188,7 +191,15 @@ pub fn create_pppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
 /// SPPM whose photon paths come from visibility chains (Hachisuka & Jensen 2011).
 pub fn create_amcppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
     let settings = PhotonMappingSettings::from_params(p);
-    Box::new(PhotonMapper::new(ctx, Variant::Sppm, settings).with_metropolis_light_paths())
+    let large_step_prob = crate::integrators::params::param_value(
+        PhotonMappingSettings::METROPOLIS_PARAMS,
+        p,
+        "large_step",
+    );
+    Box::new(
+        PhotonMapper::new(ctx, Variant::Sppm, settings)
+            .with_metropolis_light_paths(large_step_prob as f32),
+    )
 }
 
 const PHOTON_STREAM: u64 = 0x005e_ed0f_9407_0715;
@@ -241,8 +252,8 @@ impl PhotonMapper {
     }
 
     /// The same photon mapper with Metropolis photon paths (`metropolis.rs`).
-    pub fn with_metropolis_light_paths(mut self) -> Self {
-        self.metropolis = Some(MetropolisPhotons::default());
+    pub fn with_metropolis_light_paths(mut self, large_step_prob: f32) -> Self {
+        self.metropolis = Some(MetropolisPhotons::new(large_step_prob));
         self
     }
 
@@ -581,6 +592,11 @@ impl Integrator for PhotonMapper {
         match name {
             "alpha" => self.settings.alpha = value,
             "photons" => self.settings.photons = value as u64,
+            "large_step" => {
+                if let Some(m) = &mut self.metropolis {
+                    m.large_step_prob = value as f32;
+                }
+            }
             _ => debug_assert!(false, "{name} is not live"),
         }
     }
