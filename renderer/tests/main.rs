@@ -13,6 +13,7 @@ mod error_estimate;
 mod fuzz;
 mod lights;
 mod loader;
+mod metropolis_light_subpaths;
 mod photon_mapping;
 mod session;
 mod vertex_merging;

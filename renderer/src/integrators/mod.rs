@@ -15,6 +15,7 @@ pub mod ppm;
 pub mod registry;
 pub(crate) mod scatter;
 pub mod vcm;
+pub mod visibility_chain;
 
 pub use params::{
     ParamSpec, ParamValues, check_live_change, check_param, param_value, params_json,

@@ -90,6 +90,14 @@ static REGISTRY: &[IntegratorInfo] = &[
         create: vcm::create,
         bytes_per_pixel: 1000,
     },
+    IntegratorInfo {
+        name: "amcvcm",
+        title: "VCM with Metropolis light subpaths",
+        description: "vcm whose light subpaths come from Markov chains whose target is their visibility to this pass's camera subpaths (Hachisuka & Jensen 2011's chains).",
+        params: vcm::VcmSettings::METROPOLIS_PARAMS,
+        create: vcm::create_amcvcm,
+        bytes_per_pixel: 1200,
+    },
 ];
 
 pub fn registry() -> &'static [IntegratorInfo] {

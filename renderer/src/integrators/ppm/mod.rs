@@ -98,14 +98,10 @@ const RADIUS: ParamSpec = ParamSpec::new(
     (0.0, 1e6),
 )
 .automatic_at_zero();
-const PHOTONS: ParamSpec = ParamSpec::new(
-    "photons",
-    "Photons traced per pass.",
-    100_000.0,
-    (1.0, 1e7),
-)
-.integer()
-.live();
+const PHOTONS: ParamSpec =
+    ParamSpec::new("photons", "Photons traced per pass.", 100_000.0, (1.0, 1e7))
+        .integer()
+        .live();
 const MAX_DEPTH: ParamSpec = ParamSpec::new(
     "max_depth",
     "Maximum bounces of eye paths (through specular surfaces) and of photon paths; Russian roulette ends most photons earlier.",

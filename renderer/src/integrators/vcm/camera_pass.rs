@@ -29,7 +29,7 @@ pub(super) struct CameraSample {
 }
 
 /// One camera subpath through film position `film`, whose pixel's light subpath is
-/// `own_light_path`.
+/// `own_light_path`: every technique of vcm.
 pub(super) fn trace_camera_subpath(
     pass: &Pass,
     film: Vec2,
@@ -37,6 +37,55 @@ pub(super) fn trace_camera_subpath(
     sampler: &mut impl SampleSource,
     stats: &mut PassStats,
     shares: &mut TechniqueShares,
+) -> CameraSample {
+    trace_camera_techniques(
+        pass,
+        film,
+        sampler,
+        stats,
+        shares,
+        |x, out, stats, shares| {
+            if pass.connections {
+                for y in own_light_path {
+                    if y.path_length + 1 + x.path_length > pass.max_path_length {
+                        break;
+                    }
+                    let v = connect(pass, x, y, stats);
+                    if let Some(v) = add(&mut out.value, v, stats) {
+                        shares.connection(y.path_length + 1 + x.path_length, y.path_length + 1, v);
+                    }
+                }
+            }
+            if pass.merges {
+                let (outer, inner) = merge(pass, x, shares);
+                match (sanitize(outer), sanitize(inner)) {
+                    (Some(outer), Some(inner)) => {
+                        out.value += outer * pass.merge_normalization;
+                        out.merged += outer;
+                        out.merged_inner += inner;
+                    }
+                    _ => stats.dropped += 1,
+                }
+            }
+        },
+    )
+}
+
+/// One camera subpath through film position `film` with the techniques of its own vertices:
+/// emission it finds (s = 0) and next-event estimation (s = 1); at each non-specular vertex
+/// `with_light_subpaths` adds the techniques that need light subpaths (connections, merges).
+pub(super) fn trace_camera_techniques(
+    pass: &Pass,
+    film: Vec2,
+    sampler: &mut impl SampleSource,
+    stats: &mut PassStats,
+    shares: &mut TechniqueShares,
+    mut with_light_subpaths: impl FnMut(
+        &CameraVertex,
+        &mut CameraSample,
+        &mut PassStats,
+        &mut TechniqueShares,
+    ),
 ) -> CameraSample {
     let (scene, camera, w) = (pass.scene, pass.camera, &pass.weights);
     let mut ray = camera.generate_ray(film);
@@ -46,8 +95,7 @@ pub(super) fn trace_camera_subpath(
     // Every scattering so far was specular: what merging alone cannot see.
     let mut specular_path = true;
     let mut eta_scale = 1.0f32;
-    let mut l = Vec3::ZERO;
-    let (mut merged, mut merged_inner) = (Vec3::ZERO, Vec3::ZERO);
+    let mut out = CameraSample::default();
     loop {
         stats.rays += 1;
         let Some(si) = scene.intersect(&ray) else {
@@ -57,7 +105,7 @@ pub(super) fn trace_camera_subpath(
                     let weight = emission_weight(pass, &mis, path_length, specular_path, || {
                         light_densities::emitter_hit(scene, env, -ray.d)
                     });
-                    if let Some(v) = add(&mut l, beta * le * weight, stats) {
+                    if let Some(v) = add(&mut out.value, beta * le * weight, stats) {
                         shares.connection(path_length, 0, v);
                     }
                 }
@@ -80,7 +128,7 @@ pub(super) fn trace_camera_subpath(
                 let weight = emission_weight(pass, &mis, path_length, specular_path, || {
                     light_densities::emitter_hit(scene, index, si.wo)
                 });
-                if let Some(v) = add(&mut l, beta * le * weight, stats) {
+                if let Some(v) = add(&mut out.value, beta * le * weight, stats) {
                     shares.connection(path_length, 0, v);
                 }
             }
@@ -96,34 +144,13 @@ pub(super) fn trace_camera_subpath(
                 mis: &mis,
                 path_length,
             };
-            if pass.connections {
-                if path_length < pass.max_path_length {
-                    let v = next_event(pass, &camera_vertex, sampler, stats);
-                    if let Some(v) = add(&mut l, v, stats) {
-                        shares.connection(path_length + 1, 1, v);
-                    }
-                }
-                for y in own_light_path {
-                    if y.path_length + 1 + path_length > pass.max_path_length {
-                        break;
-                    }
-                    let v = connect(pass, &camera_vertex, y, stats);
-                    if let Some(v) = add(&mut l, v, stats) {
-                        shares.connection(y.path_length + 1 + path_length, y.path_length + 1, v);
-                    }
+            if pass.connections && path_length < pass.max_path_length {
+                let v = next_event(pass, &camera_vertex, sampler, stats);
+                if let Some(v) = add(&mut out.value, v, stats) {
+                    shares.connection(path_length + 1, 1, v);
                 }
             }
-            if pass.merges {
-                let (outer, inner) = merge(pass, &camera_vertex, shares);
-                match (sanitize(outer), sanitize(inner)) {
-                    (Some(outer), Some(inner)) => {
-                        l += outer * pass.merge_normalization;
-                        merged += outer;
-                        merged_inner += inner;
-                    }
-                    _ => stats.dropped += 1,
-                }
-            }
+            with_light_subpaths(&camera_vertex, &mut out, stats, shares);
         }
         let Some(next) =
             scatter_with_mis(w, &mut mis, &si, &bsdf, sampler, TransportMode::Radiance)
@@ -150,15 +177,11 @@ pub(super) fn trace_camera_subpath(
         ray = next.ray;
         path_length += 1;
     }
-    CameraSample {
-        value: l,
-        merged,
-        merged_inner,
-    }
+    out
 }
 
 /// Adds a technique's weighted value to the pixel's and gives it back, or counts it dropped.
-fn add(l: &mut Vec3, v: Vec3, stats: &mut PassStats) -> Option<Vec3> {
+pub(super) fn add(l: &mut Vec3, v: Vec3, stats: &mut PassStats) -> Option<Vec3> {
     let v = sanitize(v);
     match v {
         Some(v) => *l += v,
@@ -168,10 +191,10 @@ fn add(l: &mut Vec3, v: Vec3, stats: &mut PassStats) -> Option<Vec3> {
 }
 
 /// A non-specular vertex of a camera subpath, with what its techniques need.
-struct CameraVertex<'a> {
-    vertex: &'a Vertex,
-    mis: &'a SubpathMis,
-    path_length: u32,
+pub(super) struct CameraVertex<'a> {
+    pub vertex: &'a Vertex,
+    pub mis: &'a SubpathMis,
+    pub path_length: u32,
 }
 
 /// Weight of emission a camera subpath found: alone on the first edge; with merges only, all
@@ -239,7 +262,12 @@ fn next_event(
 }
 
 /// A connection of camera vertex `x` with light vertex `y` of the pixel's own light subpath.
-fn connect(pass: &Pass, x: &CameraVertex, y: &LightVertex, stats: &mut PassStats) -> Vec3 {
+pub(super) fn connect(
+    pass: &Pass,
+    x: &CameraVertex,
+    y: &LightVertex,
+    stats: &mut PassStats,
+) -> Vec3 {
     let (xv, yv) = (x.vertex, &y.vertex);
     let (Some(xs), Some(xb), Some(ys), Some(yb)) = (&xv.si, &xv.bsdf, &yv.si, &yv.bsdf) else {
         return Vec3::ZERO;
@@ -280,52 +308,58 @@ fn merge(pass: &Pass, x: &CameraVertex, shares: &mut TechniqueShares) -> (Vec3, 
     let Some(grid) = pass.grid else {
         return (Vec3::ZERO, Vec3::ZERO);
     };
-    let v = x.vertex;
-    let (Some(si), Some(bsdf)) = (&v.si, &v.bsdf) else {
-        return (Vec3::ZERO, Vec3::ZERO);
-    };
-    let wo = si.shading.to_local(si.wo);
-    let facing = if si.n.dot(si.wo) >= 0.0 { si.n } else { -si.n };
     let (mut sum, mut inner) = (Vec3::ZERO, Vec3::ZERO);
-    for &c in grid.candidates(si.p) {
+    for &c in grid.candidates(x.vertex.p) {
         let y = &pass.light_vertices[c as usize];
-        let dist_sq = (y.vertex.p - si.p).length_squared();
-        if y.path_length + x.path_length > pass.max_path_length || dist_sq > pass.radius_sq {
-            continue;
-        }
-        let Some(ys) = &y.vertex.si else {
+        let Some((value, within_inner)) = merge_pair(pass, x, y) else {
             continue;
         };
-        // The light arrived along ys.wo; from behind this surface it cannot be reflected here.
-        let wi = ys.wo;
-        if wi.dot(facing) <= 0.0 {
-            continue;
-        }
-        let wi_local = si.shading.to_local(wi);
-        let f = bsdf.f(wo, wi_local, TransportMode::Radiance);
-        if f == Vec3::ZERO {
-            continue;
-        }
-        // Photon density is flux per area of the surface it landed on; the ratio of cosines
-        // is as the photon mappers' (`HitPoint::response`).
-        let cos_ratio = wi_local.z.abs() / wi.dot(ys.n).abs();
-        let weight = weight_merge(
-            &pass.weights,
-            &y.mis,
-            x.mis,
-            bsdf.pdf(wo, wi_local),
-            bsdf.pdf(wi_local, wo),
-        );
-        let value = f * y.vertex.beta * (cos_ratio * weight);
         shares.merge(
             y.path_length + x.path_length,
             y.path_length,
-            v.beta * value * pass.merge_normalization,
+            value * pass.merge_normalization,
         );
         sum += value;
-        if dist_sq <= pass.inner_radius_sq {
+        if within_inner {
             inner += value;
         }
     }
-    (v.beta * sum, v.beta * inner)
+    (sum, inner)
+}
+
+/// One merge of camera vertex `x` with light vertex `y`: its value before the normalisation
+/// 1 / (pi r^2 N_L) (the camera subpath's throughput included) and whether `y` lies within
+/// the inner radius; None where they do not merge.
+pub(super) fn merge_pair(pass: &Pass, x: &CameraVertex, y: &LightVertex) -> Option<(Vec3, bool)> {
+    let v = x.vertex;
+    let (si, bsdf) = (v.si.as_ref()?, v.bsdf.as_ref()?);
+    let dist_sq = (y.vertex.p - si.p).length_squared();
+    if y.path_length + x.path_length > pass.max_path_length || dist_sq > pass.radius_sq {
+        return None;
+    }
+    let ys = y.vertex.si.as_ref()?;
+    // The light arrived along ys.wo; from behind this surface it cannot be reflected here.
+    let wi = ys.wo;
+    let facing = if si.n.dot(si.wo) >= 0.0 { si.n } else { -si.n };
+    if wi.dot(facing) <= 0.0 {
+        return None;
+    }
+    let wo = si.shading.to_local(si.wo);
+    let wi_local = si.shading.to_local(wi);
+    let f = bsdf.f(wo, wi_local, TransportMode::Radiance);
+    if f == Vec3::ZERO {
+        return None;
+    }
+    // Photon density is flux per area of the surface it landed on; the ratio of cosines is
+    // as the photon mappers' (`HitPoint::response`).
+    let cos_ratio = wi_local.z.abs() / wi.dot(ys.n).abs();
+    let weight = weight_merge(
+        &pass.weights,
+        &y.mis,
+        x.mis,
+        bsdf.pdf(wo, wi_local),
+        bsdf.pdf(wi_local, wo),
+    );
+    let value = v.beta * f * y.vertex.beta * (cos_ratio * weight);
+    Some((value, dist_sq <= pass.inner_radius_sq))
 }

@@ -67,12 +67,15 @@ pub(super) fn light_pass(
             let mut st = PassStats::default();
             for x in 0..width {
                 sampler.start_pixel_sample((y * width + x) as u64, pass);
+                let (splats, shares) = (&mut row.splats, &mut row.shares);
                 trace_light_subpath(
                     setup,
                     &mut sampler,
                     &mut row.vertices,
-                    &mut row.splats,
-                    &mut row.shares,
+                    &mut |edges, pixel, value| {
+                        shares.connection(edges, edges, value);
+                        splats.push((pixel, value));
+                    },
                     &mut st,
                 );
                 row.ends.push(row.vertices.len() as u32);
@@ -98,13 +101,13 @@ pub(super) fn light_pass(
 }
 
 /// Traces one light subpath: pushes its non-specular vertices to `vertices` (in order of
-/// their path length) and what they bring to the camera to `splats` (pixel, value).
-fn trace_light_subpath(
+/// their path length) and hands what each brings to the camera (t = 1) to `to_camera` as
+/// (edges, pixel, value).
+pub(super) fn trace_light_subpath(
     pass: &Pass,
     sampler: &mut impl SampleSource,
     vertices: &mut Vec<LightVertex>,
-    splats: &mut Vec<(usize, Vec3)>,
-    shares: &mut TechniqueShares,
+    to_camera: &mut impl FnMut(u32, usize, Vec3),
     stats: &mut PassStats,
 ) {
     let scene = pass.scene;
@@ -152,7 +155,9 @@ fn trace_light_subpath(
                 mis,
             };
             if pass.connections && path_length < pass.max_path_length {
-                connect_to_camera(pass, &vertex, splats, shares, stats);
+                if let Some((pixel, value)) = connect_to_camera(pass, &vertex, stats) {
+                    to_camera(vertex.path_length + 1, pixel, value);
+                }
             }
             vertices.push(vertex);
         }
@@ -182,39 +187,32 @@ fn trace_light_subpath(
     }
 }
 
-/// Light tracing: the light vertex joined to the camera, splatted where it lands on the film.
-fn connect_to_camera(
-    pass: &Pass,
-    y: &LightVertex,
-    splats: &mut Vec<(usize, Vec3)>,
-    shares: &mut TechniqueShares,
-    stats: &mut PassStats,
-) {
+/// Light tracing: the light vertex joined to the camera, (the pixel it lands on, its value).
+fn connect_to_camera(pass: &Pass, y: &LightVertex, stats: &mut PassStats) -> Option<(usize, Vec3)> {
     let (scene, camera) = (pass.scene, pass.camera);
     let v = &y.vertex;
     let (Some(si), Some(bsdf)) = (&v.si, &v.bsdf) else {
-        return;
+        return None;
     };
     let Some(cs) = camera.sample_wi(v.p) else {
-        return;
+        return None;
     };
     let pinhole = Vertex::camera(cs.p_camera, Vec3::splat(cs.importance / cs.pdf));
     let l =
         v.beta * v.f(&pinhole, TransportMode::Importance) * pinhole.beta * cs.wi.dot(v.ns).abs();
     if l == Vec3::ZERO {
-        return;
+        return None;
     }
     let camera_pdf_a = camera.pdf_first_hit(cs.p_camera, v.p, Some(v.ng));
     let rev_pdf = bsdf.pdf(si.shading.to_local(cs.wi), si.shading.to_local(si.wo));
     let weight = weight_light_trace(&pass.weights, &y.mis, camera_pdf_a, rev_pdf);
     if !visible(scene, v, &pinhole, &mut stats.rays) {
-        return;
+        return None;
     }
     let Some(value) = sanitize(l * weight) else {
         stats.dropped += 1;
-        return;
+        return None;
     };
-    shares.connection(y.path_length + 1, y.path_length + 1, value);
     let (x, yy) = (cs.raster.x as usize, cs.raster.y as usize);
-    splats.push((yy * camera.width as usize + x, value));
+    Some((yy * camera.width as usize + x, value))
 }

@@ -15,6 +15,7 @@
 mod camera_pass;
 pub mod light_densities;
 mod light_pass;
+pub mod metropolis;
 pub mod mis;
 pub mod techniques;
 
@@ -34,6 +35,7 @@ use camera_pass::CameraSample;
 use glam::Vec2;
 use glam::Vec3;
 use light_pass::LightVertex;
+use metropolis::MetropolisLightSubpaths;
 use mis::MisWeights;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -86,6 +88,14 @@ impl VcmSettings {
         params::MAX_DEPTH,
     ];
 
+    /// amcvcm's: vcm's and the chains' large-step probability.
+    pub const METROPOLIS_PARAMS: &'static [ParamSpec] = &[
+        Self::PARAMS[0],
+        Self::PARAMS[1],
+        Self::PARAMS[2],
+        metropolis::LARGE_STEP,
+    ];
+
     pub fn from_params(p: &ParamValues) -> Self {
         params::read_settings(Self::PARAMS, p)
     }
@@ -93,6 +103,15 @@ impl VcmSettings {
 
 pub fn create(ctx: RenderContext, params: &ParamValues) -> Box<dyn Integrator> {
     Box::new(Vcm::new(ctx, VcmSettings::from_params(params)))
+}
+
+/// vcm whose light subpaths come from visibility chains (`metropolis.rs`).
+pub fn create_amcvcm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
+    let large_step_prob = params::param_value(VcmSettings::METROPOLIS_PARAMS, p, "large_step");
+    Box::new(
+        Vcm::new(ctx, VcmSettings::from_params(p))
+            .with_metropolis_light_subpaths(large_step_prob as f32),
+    )
 }
 
 const MAX_HISTORY: usize = 2048;
@@ -140,6 +159,8 @@ pub struct Vcm {
     /// (passes, radius), thinned to stay bounded.
     radius_history: Vec<[f64; 2]>,
     history_stride: u64,
+    /// Light subpaths from visibility chains (`metropolis.rs`) in place of independent ones.
+    metropolis: Option<MetropolisLightSubpaths>,
 }
 
 impl Vcm {
@@ -165,8 +186,15 @@ impl Vcm {
             shares: TechniqueShares::default(),
             radius_history: Vec::new(),
             history_stride: 1,
+            metropolis: None,
             ctx,
         }
+    }
+
+    /// The same estimator with light subpaths from visibility chains (`metropolis.rs`).
+    pub fn with_metropolis_light_subpaths(mut self, large_step_prob: f32) -> Self {
+        self.metropolis = Some(MetropolisLightSubpaths::new(large_step_prob));
+        self
     }
 
     /// What each technique brought to the image so far.
@@ -211,7 +239,7 @@ impl Integrator for Vcm {
             techniques.connections,
             techniques.merges,
         );
-        let mut setup = Pass {
+        let setup = Pass {
             scene,
             camera,
             weights,
@@ -225,38 +253,43 @@ impl Integrator for Vcm {
             grid: None,
         };
         let mut stats = PassStats::default();
-        let light_pass::LightPaths {
-            vertices,
-            ends,
-            splats,
-            shares,
-        } = light_pass::light_pass(&setup, self.ctx.seed, pass, cancel, &mut stats)?;
-        let grid = techniques.merges.then(|| {
-            let points: Vec<Option<(Vec3, f32)>> = vertices
-                .iter()
-                .map(|v| Some((v.vertex.p, radius_sq.sqrt())))
-                .collect();
-            HashGrid::build(&points)
-        });
-        setup.light_vertices = &vertices;
-        setup.grid = grid.as_ref();
-        let setup = &setup;
-        let ends = &ends;
-        let (camera_stats, camera_shares) = camera_pass(
-            &mut self.pass_buffer,
-            setup,
-            ends,
-            self.ctx.seed,
-            pass,
-            cancel,
-        )?;
-        stats = stats + camera_stats;
-        self.shares.add(&shares);
-        self.shares.add(&camera_shares);
-        for (i, v) in splats {
-            self.pass_buffer[i].value += v;
+        let merge_normalization = setup.merge_normalization;
+        if let Some(metropolis) = &mut self.metropolis {
+            let (cameras, camera_stats, camera_shares) = metropolis::camera_subpaths(
+                &mut self.pass_buffer,
+                &setup,
+                self.ctx.seed,
+                pass,
+                cancel,
+            )?;
+            stats = stats + camera_stats;
+            let gather = metropolis.light_subpaths(
+                &setup,
+                &cameras,
+                pixels as u64,
+                self.ctx.seed,
+                cancel,
+                &mut stats,
+            )?;
+            self.shares.add(&camera_shares);
+            self.shares.add(&gather.shares);
+            for (i, out) in self.pass_buffer.iter_mut().enumerate() {
+                out.value += gather.value[i];
+                out.merged += gather.merged[i];
+                out.merged_inner += gather.merged_inner[i];
+            }
+            self.pass_bytes = cameras.memory_bytes();
+        } else {
+            self.pass_bytes = uniform_pass(
+                &mut self.pass_buffer,
+                &mut self.shares,
+                setup,
+                (self.ctx.seed, pass),
+                cancel,
+                &mut stats,
+            )?;
         }
-        let area = 1.0 / f64::from(setup.merge_normalization);
+        let area = 1.0 / f64::from(merge_normalization);
         for (sums, sample) in self.sums.iter_mut().zip(&self.pass_buffer) {
             let bias = kernel_bias::pass_bias(
                 sample.merged.as_dvec3(),
@@ -265,9 +298,6 @@ impl Integrator for Vcm {
             );
             sums.add(pass, sample.value.as_dvec3(), bias);
         }
-        self.pass_bytes = std::mem::size_of_val(vertices.as_slice())
-            + std::mem::size_of_val(ends.as_slice())
-            + grid.as_ref().map_or(0, |g| g.memory_bytes());
         // The next pass's radius: r_{i+1}^2 = r_i^2 ((i + 1) / (i + 2))^(1 - alpha).
         let i = self.passes as f64;
         self.radius_sq = (self.radius_sq * ((i + 1.0) / (i + 2.0)).powf(1.0 - self.settings.alpha))
@@ -282,6 +312,11 @@ impl Integrator for Vcm {
             + std::mem::size_of_val(self.pass_buffer.as_slice())
             + std::mem::size_of_val(self.radius_history.as_slice())
             + self.pass_bytes
+            + self.metropolis.as_ref().map_or(0, |m| m.memory_bytes())
+    }
+
+    fn statistics(&self) -> Option<serde_json::Value> {
+        self.metropolis.as_ref().map(|m| m.statistics())
     }
 
     fn image(&self) -> Image {
@@ -318,6 +353,11 @@ impl Integrator for Vcm {
             "alpha" => self.settings.alpha = value,
             // The schedule goes on from the new radius; 0 returns to the automatic one,
             // shrunk as far as the passes so far would have shrunk it.
+            "large_step" => {
+                if let Some(m) = &mut self.metropolis {
+                    m.large_step_prob = value as f32;
+                }
+            }
             "radius" => {
                 self.settings.radius = value;
                 let radius = if value > 0.0 {
@@ -344,6 +384,7 @@ impl Integrator for Vcm {
             points: self.radius_history.clone(),
             point_names: Vec::new(),
         });
+        plots.extend(self.metropolis.iter().flat_map(|m| m.plots()));
         plots
     }
 }
@@ -368,6 +409,46 @@ pub(super) fn scatter_with_mis(
     };
     mis.scatter(w, next.sample.pdf, rev_pdf, si.n.dot(next.ray.d), delta);
     Some(next)
+}
+
+/// The light and camera halves of a pass with independent light subpaths (module docs) into
+/// `buffer`; the bytes its light vertices and grid took.
+fn uniform_pass(
+    buffer: &mut [CameraSample],
+    technique_shares: &mut TechniqueShares,
+    setup: Pass,
+    (seed, pass): (u64, u64),
+    cancel: &AtomicBool,
+    stats: &mut PassStats,
+) -> Result<usize, Cancelled> {
+    let light_pass::LightPaths {
+        vertices,
+        ends,
+        splats,
+        shares,
+    } = light_pass::light_pass(&setup, seed, pass, cancel, stats)?;
+    let grid = setup.merges.then(|| {
+        let points: Vec<Option<(Vec3, f32)>> = vertices
+            .iter()
+            .map(|v| Some((v.vertex.p, setup.radius_sq.sqrt())))
+            .collect();
+        HashGrid::build(&points)
+    });
+    let setup = Pass {
+        light_vertices: &vertices,
+        grid: grid.as_ref(),
+        ..setup
+    };
+    let (camera_stats, camera_shares) = camera_pass(buffer, &setup, &ends, seed, pass, cancel)?;
+    *stats = *stats + camera_stats;
+    technique_shares.add(&shares);
+    technique_shares.add(&camera_shares);
+    for (i, v) in splats {
+        buffer[i].value += v;
+    }
+    Ok(std::mem::size_of_val(vertices.as_slice())
+        + std::mem::size_of_val(ends.as_slice())
+        + grid.as_ref().map_or(0, |g| g.memory_bytes()))
 }
 
 /// The camera half of pass `pass` into `buffer`: image rows in parallel, each pixel's sampler

@@ -63,6 +63,16 @@ impl TechniqueShares {
         l.merges[j - 1] += f64::from(luminance(value));
     }
 
+    /// Every share times `s` (a chain's normalisation).
+    pub fn scale(&mut self, s: f64) {
+        for l in &mut self.lengths {
+            l.connections
+                .iter_mut()
+                .chain(&mut l.merges)
+                .for_each(|x| *x *= s);
+        }
+    }
+
     pub fn add(&mut self, other: &TechniqueShares) {
         for (a, b) in self.lengths.iter_mut().zip(&other.lengths) {
             for (x, y) in a.connections.iter_mut().zip(&b.connections) {

@@ -1,0 +1,492 @@
+//! Metropolis light subpaths for vertex connection and merging (`amcvcm`): vcm whose light
+//! subpaths come from visibility chains (Hachisuka & Jensen 2011, as amcppm's photons; the
+//! chains' counters, adaptation and normalisation are `visibility_chain.rs`).
+//!
+//! A pass turns vcm's around. First the camera subpaths, one per pixel, with the techniques
+//! of their own vertices (emission found, next-event estimation); their non-specular vertices
+//! are stored and indexed in the hash grid. Then each worker runs a chain over (u, k): a
+//! light subpath u in primary sample space and a camera subpath k, drawn uniformly among the
+//! pass's at every proposal. A proposal is evaluated whole: g(u, k) is what its vertices bring
+//! joined to the camera (t = 1), connected to the vertices of camera subpath k and merged
+//! with every stored camera vertex within the radius, each weighted by vcm's MIS for N_L
+//! independent light subpaths. The mean of g over uniform (u, k), times N_L, is what vcm's
+//! light subpaths bring to the image, so any estimate of that mean serves; the chain's is the
+//! visibility chain's, whose target is V = [g != 0]. Each state's contributions are added
+//! once when the chain leaves it, weighted by the iterations it was held, and at the end of
+//! the pass a chain's sum is scaled by its normalisation.
+//!
+//! A light subpath that a chain keeps is connected to a new camera subpath at each iteration
+//! it is proposed with, and merged with every camera vertex near it: where few light
+//! subpaths reach what the camera sees (light through a gap), the chains keep them there.
+
+use super::Pass;
+use super::camera_pass::{self, CameraSample, CameraVertex, connect, merge_pair};
+use super::light_pass::{LightVertex, trace_light_subpath};
+use super::mis::SubpathMis;
+use super::techniques::TechniqueShares;
+use crate::film::sanitize;
+use crate::integrators::bdpt::vertex::Vertex;
+use crate::integrators::ppm::hash_grid::HashGrid;
+use crate::integrators::visibility_chain::{ChainCounters, ChainHistory, large_step_param};
+use crate::integrators::{Cancelled, ParamSpec, PassStats, PlotSeries};
+use crate::sampling::pss::{LIGHT_STREAM, PssSampler};
+use crate::sampling::sampler::Sampler;
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+const CHAIN_STREAM: u64 = 0x5ca1_ab1e_0035_0002;
+const PICK_STREAM: u64 = 0x5ca1_ab1e_0035_0003;
+
+/// amcvcm's share of uniform proposals.
+pub const LARGE_STEP: ParamSpec = large_step_param(
+    "Probability that a chain proposes a uniform light subpath (which also measures the visible fraction) instead of a small step from its state; 1 is vcm's independent light subpaths with repeats.",
+);
+
+/// A stored non-specular vertex of a camera subpath.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct StoredCameraVertex {
+    pub vertex: Vertex,
+    pub mis: SubpathMis,
+    pub path_length: u32,
+    pub pixel: u32,
+}
+
+impl StoredCameraVertex {
+    fn as_camera_vertex(&self) -> CameraVertex<'_> {
+        CameraVertex {
+            vertex: &self.vertex,
+            mis: &self.mis,
+            path_length: self.path_length,
+        }
+    }
+}
+
+/// A pass's camera subpaths: their stored vertices, subpath after subpath, where each
+/// subpath's end, and the grid over the vertices for merges.
+pub(super) struct CameraVertices {
+    pub vertices: Vec<StoredCameraVertex>,
+    pub ends: Vec<u32>,
+    pub grid: Option<HashGrid>,
+}
+
+impl CameraVertices {
+    fn subpath(&self, k: usize) -> &[StoredCameraVertex] {
+        let start = if k == 0 { 0 } else { self.ends[k - 1] as usize };
+        &self.vertices[start..self.ends[k] as usize]
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(self.vertices.as_slice())
+            + std::mem::size_of_val(self.ends.as_slice())
+            + self.grid.as_ref().map_or(0, |g| g.memory_bytes())
+    }
+}
+
+/// The camera half of an amcvcm pass into `buffer` (emission found and next-event
+/// estimation), the subpaths' vertices stored: image rows in parallel, each pixel's sampler
+/// keyed by (seed, pixel, pass) as vcm's.
+pub(super) fn camera_subpaths(
+    buffer: &mut [CameraSample],
+    setup: &Pass,
+    seed: u64,
+    pass: u64,
+    cancel: &AtomicBool,
+) -> Result<(CameraVertices, PassStats, TechniqueShares), Cancelled> {
+    let width = setup.camera.width as usize;
+    type Row = (
+        Vec<StoredCameraVertex>,
+        Vec<u32>,
+        PassStats,
+        TechniqueShares,
+    );
+    let rows: Vec<Row> = buffer
+        .par_chunks_mut(width.max(1))
+        .enumerate()
+        .map(|(y, row)| {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
+            }
+            let mut sampler = Sampler::new(seed);
+            let (mut vertices, mut ends) = (Vec::new(), Vec::with_capacity(width));
+            let mut stats = PassStats::default();
+            let mut shares = TechniqueShares::default();
+            for (x, out) in row.iter_mut().enumerate() {
+                let pixel = (y * width + x) as u32;
+                sampler.start_pixel_sample(u64::from(pixel), pass);
+                let film = Vec2::new(x as f32, y as f32) + sampler.get_2d();
+                *out = camera_pass::trace_camera_techniques(
+                    setup,
+                    film,
+                    &mut sampler,
+                    &mut stats,
+                    &mut shares,
+                    |x, _, _, _| {
+                        vertices.push(StoredCameraVertex {
+                            vertex: *x.vertex,
+                            mis: *x.mis,
+                            path_length: x.path_length,
+                            pixel,
+                        })
+                    },
+                );
+                ends.push(vertices.len() as u32);
+                stats.samples += 1;
+            }
+            Ok((vertices, ends, stats, shares))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut all = CameraVertices {
+        vertices: Vec::with_capacity(rows.iter().map(|r| r.0.len()).sum()),
+        ends: Vec::with_capacity(buffer.len()),
+        grid: None,
+    };
+    let (mut stats, mut shares) = (PassStats::default(), TechniqueShares::default());
+    for (vertices, ends, st, sh) in rows {
+        let offset = all.vertices.len() as u32;
+        all.ends.extend(ends.iter().map(|e| e + offset));
+        all.vertices.extend(vertices);
+        stats = stats + st;
+        shares.add(&sh);
+    }
+    if setup.merges {
+        let radius = setup.radius_sq.sqrt();
+        let points: Vec<Option<(Vec3, f32)>> = all
+            .vertices
+            .iter()
+            .map(|v| Some((v.vertex.p, radius)))
+            .collect();
+        all.grid = Some(HashGrid::build(&points));
+    }
+    Ok((all, stats, shares))
+}
+
+/// What a light subpath brings to one pixel by one technique.
+#[derive(Clone, Copy, Debug)]
+struct Contribution {
+    pixel: u32,
+    value: Vec3,
+    technique: Technique,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Technique {
+    /// A connection (t = 1 included) on a path of `edges` edges with `s` light vertices.
+    Connection { edges: u32, s: u32 },
+    /// A merge, its value before the normalisation 1 / (pi r^2 N_L); `inner` whether within
+    /// the kernel-bias estimate's inner radius.
+    Merge {
+        edges: u32,
+        light_edges: u32,
+        inner: bool,
+    },
+}
+
+/// What a worker's chain brought to each pixel this pass, and to each technique.
+pub(super) struct ChainGather {
+    pub value: Vec<Vec3>,
+    pub merged: Vec<Vec3>,
+    pub merged_inner: Vec<Vec3>,
+    pub shares: TechniqueShares,
+}
+
+impl ChainGather {
+    fn new(pixels: usize) -> Self {
+        ChainGather {
+            value: vec![Vec3::ZERO; pixels],
+            merged: vec![Vec3::ZERO; pixels],
+            merged_inner: vec![Vec3::ZERO; pixels],
+            shares: TechniqueShares::default(),
+        }
+    }
+
+    /// A state's contributions, each `weight` times.
+    fn add(&mut self, contributions: &[Contribution], weight: f32, merge_normalization: f32) {
+        for c in contributions {
+            let (p, v) = (c.pixel as usize, c.value * weight);
+            match c.technique {
+                Technique::Connection { edges, s } => {
+                    self.value[p] += v;
+                    self.shares.connection(edges, s, v);
+                }
+                Technique::Merge {
+                    edges,
+                    light_edges,
+                    inner,
+                } => {
+                    self.value[p] += v * merge_normalization;
+                    self.merged[p] += v;
+                    if inner {
+                        self.merged_inner[p] += v;
+                    }
+                    self.shares
+                        .merge(edges, light_edges, v * merge_normalization);
+                }
+            }
+        }
+    }
+
+    fn scale(&mut self, s: f32) {
+        for v in self
+            .value
+            .iter_mut()
+            .chain(&mut self.merged)
+            .chain(&mut self.merged_inner)
+        {
+            *v *= s;
+        }
+        self.shares.scale(f64::from(s));
+    }
+}
+
+/// One worker's chain over (light subpath, camera subpath).
+#[derive(Clone, Debug)]
+pub(super) struct LightSubpathChain {
+    state: PssSampler,
+    pick: Sampler,
+    key: u64,
+    steps: u64,
+    /// The current state's contributions (empty until the pass's first visible sample), and
+    /// the iterations it has been held since they were last added.
+    current: Vec<Contribution>,
+    held: u32,
+    proposal: Vec<Contribution>,
+    vertices: Vec<LightVertex>,
+    pub(super) counters: ChainCounters,
+}
+
+impl LightSubpathChain {
+    fn new(seed: u64, index: u64) -> Self {
+        let counters = ChainCounters::default();
+        LightSubpathChain {
+            state: PssSampler::new(seed ^ CHAIN_STREAM, index, counters.mutation_size, 1.0),
+            pick: Sampler::new(seed ^ PICK_STREAM),
+            key: index,
+            steps: 0,
+            current: Vec::new(),
+            held: 0,
+            proposal: Vec::new(),
+            vertices: Vec::new(),
+            counters,
+        }
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.state.memory_bytes()
+            + (self.current.capacity() + self.proposal.capacity()) * size_of::<Contribution>()
+            + self.vertices.capacity() * size_of::<LightVertex>()
+    }
+
+    /// One iteration: a proposal evaluated into `proposal`, taken when visible; the state it
+    /// leaves is added to `gather` with the iterations it was held.
+    fn iterate(
+        &mut self,
+        setup: &Pass,
+        cameras: &CameraVertices,
+        gather: &mut ChainGather,
+        large_step_prob: f32,
+        st: &mut PassStats,
+    ) {
+        let c = &mut self.counters;
+        let searching = self.current.is_empty();
+        self.state.large_step_prob = c.large_step_prob(!searching, large_step_prob);
+        self.state.sigma = c.mutation_size;
+        self.state.start_iteration();
+        self.state.start_stream(LIGHT_STREAM, 0);
+        self.steps += 1;
+        self.pick.start_pixel_sample(self.key, self.steps);
+        let subpaths = cameras.ends.len();
+        let k = ((self.pick.get_1d() * subpaths as f32) as usize).min(subpaths.saturating_sub(1));
+        self.proposal.clear();
+        self.vertices.clear();
+        let proposal = &mut self.proposal;
+        trace_light_subpath(
+            setup,
+            &mut self.state,
+            &mut self.vertices,
+            &mut |edges, pixel, value| {
+                proposal.push(Contribution {
+                    pixel: pixel as u32,
+                    value,
+                    technique: Technique::Connection { edges, s: edges },
+                })
+            },
+            st,
+        );
+        if subpaths > 0 {
+            evaluate(setup, cameras, k, &self.vertices, &mut self.proposal, st);
+        }
+        let visible = !self.proposal.is_empty();
+        c.record(searching, self.state.is_large_step(), visible);
+        if visible {
+            self.state.accept();
+            gather.add(&self.current, self.held as f32, setup.merge_normalization);
+            std::mem::swap(&mut self.current, &mut self.proposal);
+            self.held = 0;
+        } else {
+            self.state.reject();
+        }
+        if !self.current.is_empty() {
+            self.held += 1;
+            self.counters.chain_samples += 1;
+        }
+    }
+}
+
+/// The connections of light subpath `light` with camera subpath `k` and its merges with every
+/// stored camera vertex within the radius, into `out`.
+fn evaluate(
+    setup: &Pass,
+    cameras: &CameraVertices,
+    k: usize,
+    light: &[LightVertex],
+    out: &mut Vec<Contribution>,
+    st: &mut PassStats,
+) {
+    let own = cameras.subpath(k);
+    for y in light {
+        if setup.connections {
+            for x in own {
+                if y.path_length + 1 + x.path_length > setup.max_path_length {
+                    break;
+                }
+                let v = connect(setup, &x.as_camera_vertex(), y, st);
+                match sanitize(v) {
+                    Some(v) if v != Vec3::ZERO => out.push(Contribution {
+                        pixel: x.pixel,
+                        value: v,
+                        technique: Technique::Connection {
+                            edges: y.path_length + 1 + x.path_length,
+                            s: y.path_length + 1,
+                        },
+                    }),
+                    Some(_) => {}
+                    None => st.dropped += 1,
+                }
+            }
+        }
+        let Some(grid) = &cameras.grid else {
+            continue;
+        };
+        for &c in grid.candidates(y.vertex.p) {
+            let x = &cameras.vertices[c as usize];
+            let Some((v, inner)) = merge_pair(setup, &x.as_camera_vertex(), y) else {
+                continue;
+            };
+            match sanitize(v) {
+                Some(v) if v != Vec3::ZERO => out.push(Contribution {
+                    pixel: x.pixel,
+                    value: v,
+                    technique: Technique::Merge {
+                        edges: y.path_length + x.path_length,
+                        light_edges: y.path_length,
+                        inner,
+                    },
+                }),
+                Some(_) => {}
+                None => st.dropped += 1,
+            }
+        }
+    }
+}
+
+/// vcm's Metropolis light subpaths: a chain per worker, and what the viewer plots of them.
+#[derive(Clone, Debug, Default)]
+pub struct MetropolisLightSubpaths {
+    /// Probability of a uniform proposal (`LARGE_STEP`).
+    pub large_step_prob: f32,
+    chains: Vec<LightSubpathChain>,
+    history: ChainHistory,
+}
+
+impl MetropolisLightSubpaths {
+    pub fn new(large_step_prob: f32) -> Self {
+        MetropolisLightSubpaths {
+            large_step_prob,
+            ..Default::default()
+        }
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        self.chains.iter().map(|c| c.memory_bytes()).sum::<usize>() + self.history.memory_bytes()
+    }
+
+    /// The light half of a pass: `light_paths` iterations shared among the chains (one per
+    /// worker), each chain's sum weighted by its normalisation, summed in chain order.
+    pub(super) fn light_subpaths(
+        &mut self,
+        setup: &Pass,
+        cameras: &CameraVertices,
+        light_paths: u64,
+        seed: u64,
+        cancel: &AtomicBool,
+        stats: &mut PassStats,
+    ) -> Result<ChainGather, Cancelled> {
+        let workers = rayon::current_num_threads().max(1);
+        if self.chains.len() != workers {
+            self.chains = (0..workers as u64)
+                .map(|i| LightSubpathChain::new(seed, i))
+                .collect();
+        }
+        self.history
+            .start_pass(self.chains.iter().map(|c| &c.counters));
+        let pixels = cameras.ends.len();
+        let count = self.chains.len() as u64;
+        let large_step_prob = self.large_step_prob;
+        let results: Vec<(ChainGather, PassStats)> = self
+            .chains
+            .par_iter_mut()
+            .enumerate()
+            .map(|(i, chain)| {
+                let i = i as u64;
+                let iterations = light_paths / count + u64::from(i < light_paths % count);
+                let mut gather = ChainGather::new(pixels);
+                let mut st = PassStats::default();
+                chain.current.clear();
+                chain.held = 0;
+                chain.counters.start_pass();
+                for j in 0..iterations {
+                    if j % 256 == 0 && cancel.load(Ordering::Relaxed) {
+                        return Err(Cancelled);
+                    }
+                    chain.iterate(setup, cameras, &mut gather, large_step_prob, &mut st);
+                }
+                gather.add(&chain.current, chain.held as f32, setup.merge_normalization);
+                chain.held = 0;
+                gather.scale(chain.counters.scale(iterations) as f32);
+                Ok((gather, st))
+            })
+            .collect::<Result<_, _>>()?;
+        let v = self
+            .history
+            .visible_fraction(self.chains.iter().map(|c| &c.counters));
+        self.history
+            .end_pass(self.chains.iter().map(|c| &c.counters));
+        let mut total = ChainGather::new(pixels);
+        for (g, st) in results {
+            for (t, v) in total.value.iter_mut().zip(&g.value) {
+                *t += *v;
+            }
+            for (t, v) in total.merged.iter_mut().zip(&g.merged) {
+                *t += *v;
+            }
+            for (t, v) in total.merged_inner.iter_mut().zip(&g.merged_inner) {
+                *t += *v;
+            }
+            total.shares.add(&g.shares);
+            *stats = *stats + st;
+        }
+        total.scale(v as f32);
+        Ok(total)
+    }
+
+    /// The run's counters for `--stats`.
+    pub fn statistics(&self) -> serde_json::Value {
+        self.history
+            .statistics(self.chains.iter().map(|c| &c.counters))
+    }
+
+    pub fn plots(&self) -> Vec<PlotSeries> {
+        self.history.plots("light subpaths")
+    }
+}
