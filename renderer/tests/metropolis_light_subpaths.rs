@@ -1,6 +1,8 @@
-//! amcvcm: vcm whose light subpaths come from visibility chains, against the closed forms,
-//! the path tracer, bdpt where light subpaths rarely reach what the camera sees, and at the
-//! extremes of its large-step probability.
+//! vcm whose light subpaths come from Markov chains (amcvcm: visibility chains), against the
+//! closed forms, the path tracer, bdpt where light subpaths rarely reach what the camera
+//! sees, and at the extremes of the large-step probability.
+
+const CHAINED: [&str; 1] = ["amcvcm"];
 
 use caustica_renderer::camera::Camera;
 use caustica_renderer::integrators::{Integrator, RenderContext, find};
@@ -10,7 +12,8 @@ use std::sync::Arc;
 
 use crate::common::{block_means, block_means_of, mean, render, z_scores};
 
-fn amcvcm(
+fn chained(
+    name: &str,
     desc: SceneDescription,
     size: u32,
     seed: u64,
@@ -27,7 +30,7 @@ fn amcvcm(
     // the noise of 1024 passes on 32 x 32 pixels (`vertex_merging`'s agreement tests).
     let params: caustica_renderer::integrators::ParamValues =
         extra.iter().map(|(k, v)| (k.to_string(), *v)).collect();
-    (find("amcvcm").unwrap().create)(ctx, &params)
+    (find(name).unwrap().create)(ctx, &params)
 }
 
 /// The closed forms (radiance 1 everywhere; every light subpath is visible, so the chains'
@@ -38,12 +41,15 @@ fn amcvcm(
 /// passes of 24 x 24: below 0.3 % (vcm's); the chains' correlation at 0.01 widens it, so we
 /// allow 2 % there and 1 % elsewhere.
 #[test]
-fn amcvcm_reproduces_the_closed_forms_at_every_large_step_probability() {
+fn chained_vcm_reproduces_the_closed_forms_at_every_large_step_probability() {
     for (name, desc) in crate::common::closed_form_scenes() {
-        for (large_step, tolerance) in [(0.3, 0.01), (0.01, 0.02), (1.0, 0.01)] {
+        for (integrator, (large_step, tolerance)) in CHAINED
+            .iter()
+            .flat_map(|i| [(0.3, 0.01), (0.01, 0.02), (1.0, 0.01)].map(|l| (*i, l)))
+        {
             let (img, dropped) = render(
                 desc.clone(),
-                "amcvcm",
+                integrator,
                 &[("large_step", large_step)],
                 64,
                 24,
@@ -54,25 +60,27 @@ fn amcvcm_reproduces_the_closed_forms_at_every_large_step_probability() {
             let m = mean(&img);
             assert!(
                 (m - 1.0).abs() < tolerance,
-                "{name}, large_step {large_step}: mean {m}, exact 1"
+                "{integrator}, {name}, large_step {large_step}: mean {m}, exact 1"
             );
         }
     }
 }
 
-/// On the Cornell boxes (visible fraction about 0.8) amcvcm agrees block by block with the
+/// On the Cornell boxes (visible fraction about 0.8) each agrees block by block with the
 /// path tracer as vcm does (`vertex_merging::merges_and_vcm_converge_to_the_path_tracer`).
 /// Each pass's chains start afresh, so passes are independent and their spread is the noise.
 #[test]
-fn amcvcm_converges_to_the_path_tracer_on_the_cornell_boxes() {
+fn chained_vcm_converges_to_the_path_tracer_on_the_cornell_boxes() {
     for (name, desc) in [
         ("cornell-box", cornell_box(false)),
         ("cornell-glass", cornell_box(true)),
     ] {
         let pt = block_means("pt", &desc, 1024, 32, 4, 1, &[]);
-        let mut it = amcvcm(desc, 32, 2, &[]);
-        let (z, ratio) = z_scores(&pt, &block_means_of(it.as_mut(), 1024, 32, 4));
-        crate::common::assert_blocks_agree(&format!("{name}, amcvcm vs pt"), &z, ratio);
+        for integrator in CHAINED {
+            let mut it = chained(integrator, desc.clone(), 32, 2, &[]);
+            let (z, ratio) = z_scores(&pt, &block_means_of(it.as_mut(), 1024, 32, 4));
+            crate::common::assert_blocks_agree(&format!("{name}, {integrator} vs pt"), &z, ratio);
+        }
     }
 }
 
@@ -81,14 +89,57 @@ fn amcvcm_converges_to_the_path_tracer_on_the_cornell_boxes() {
 /// normalisation by the visible fraction is what a wrong one would miss by a factor. Against
 /// bdpt at 2048 passes, block by block.
 #[test]
-fn amcvcm_agrees_with_bdpt_where_light_subpaths_are_rarely_visible() {
+fn chained_vcm_agrees_with_bdpt_where_light_subpaths_are_rarely_visible() {
     let desc = door();
     let depth = [("max_depth", 10.0)];
     let bdpt = block_means("bdpt", &desc, 2048, 32, 4, 1, &depth);
-    let mut it = amcvcm(desc, 32, 2, &depth);
-    let (z, ratio) = z_scores(&bdpt, &block_means_of(it.as_mut(), 1024, 32, 4));
-    crate::common::assert_blocks_agree("door, amcvcm vs bdpt", &z, ratio);
-    let stats = it.statistics().unwrap();
-    let visible = stats["visible_fraction"].as_f64().unwrap();
-    assert!(visible < 0.1, "visible fraction {visible}");
+    for integrator in CHAINED {
+        let mut it = chained(integrator, desc.clone(), 32, 2, &depth);
+        let (z, ratio) = z_scores(&bdpt, &block_means_of(it.as_mut(), 1024, 32, 4));
+        crate::common::assert_blocks_agree(&format!("door, {integrator} vs bdpt"), &z, ratio);
+        let stats = it.statistics().unwrap();
+        let visible = stats["visible_fraction"].as_f64().unwrap();
+        assert!(visible < 0.1, "{integrator}: visible fraction {visible}");
+    }
+}
+
+/// The technique shares the viewer plots carry the chains' weights: over every path length
+/// and technique they add up to amcvcm's image luminance times the passes, as vcm's do
+/// (`vertex_merging::the_technique_shares_add_up_to_the_image`), and merges bring part of the
+/// light on the Cornell box with glass.
+#[test]
+fn amcvcm_technique_shares_add_up_to_the_image() {
+    use caustica_renderer::geometry::luminance;
+    use caustica_renderer::integrators::vcm::{Vcm, VcmSettings};
+    let scene = Arc::new(Scene::build(cornell_box(true)).unwrap());
+    let camera = Camera::new(&scene.camera, 24, 24);
+    let ctx = RenderContext {
+        scene,
+        camera,
+        seed: 3,
+    };
+    let settings = VcmSettings::from_params(&[("max_depth".to_string(), 5.0)].into());
+    let mut it = Vcm::new(ctx, settings).with_metropolis_light_subpaths(0.3);
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let passes = 8;
+    for pass in 0..passes {
+        it.render_counted_pass(pass, &cancel).unwrap();
+    }
+    let image: f64 = it
+        .image()
+        .pixels
+        .iter()
+        .map(|p| f64::from(luminance(*p)))
+        .sum();
+    let shares = it.technique_shares();
+    let connections: f64 = shares.lengths.iter().flat_map(|l| &l.connections).sum();
+    let merges: f64 = shares.lengths.iter().flat_map(|l| &l.merges).sum();
+    let total = image * passes as f64;
+    assert!(
+        ((connections + merges) / total - 1.0).abs() < 1e-4,
+        "shares {} against {total}",
+        connections + merges
+    );
+    assert!(merges > 0.01 * total, "merges {merges}");
+    assert!(it.plots().iter().any(|p| p.plot == "Visibility"));
 }

@@ -154,10 +154,11 @@ pub(super) fn trace_light_subpath(
                 path_length,
                 mis,
             };
-            if pass.connections && path_length < pass.max_path_length {
-                if let Some((pixel, value)) = connect_to_camera(pass, &vertex, stats) {
-                    to_camera(vertex.path_length + 1, pixel, value);
-                }
+            if pass.connections
+                && path_length < pass.max_path_length
+                && let Some((pixel, value)) = connect_to_camera(pass, &vertex, stats)
+            {
+                to_camera(vertex.path_length + 1, pixel, value);
             }
             vertices.push(vertex);
         }
@@ -194,9 +195,7 @@ fn connect_to_camera(pass: &Pass, y: &LightVertex, stats: &mut PassStats) -> Opt
     let (Some(si), Some(bsdf)) = (&v.si, &v.bsdf) else {
         return None;
     };
-    let Some(cs) = camera.sample_wi(v.p) else {
-        return None;
-    };
+    let cs = camera.sample_wi(v.p)?;
     let pinhole = Vertex::camera(cs.p_camera, Vec3::splat(cs.importance / cs.pdf));
     let l =
         v.beta * v.f(&pinhole, TransportMode::Importance) * pinhole.beta * cs.wi.dot(v.ns).abs();

@@ -163,14 +163,14 @@ pub(super) fn camera_subpaths(
 
 /// What a light subpath brings to one pixel by one technique.
 #[derive(Clone, Copy, Debug)]
-struct Contribution {
+pub(super) struct Contribution {
     pixel: u32,
     value: Vec3,
     technique: Technique,
 }
 
 #[derive(Clone, Copy, Debug)]
-enum Technique {
+pub(super) enum Technique {
     /// A connection (t = 1 included) on a path of `edges` edges with `s` light vertices.
     Connection { edges: u32, s: u32 },
     /// A merge, its value before the normalisation 1 / (pi r^2 N_L); `inner` whether within
@@ -191,7 +191,7 @@ pub(super) struct ChainGather {
 }
 
 impl ChainGather {
-    fn new(pixels: usize) -> Self {
+    pub(super) fn new(pixels: usize) -> Self {
         ChainGather {
             value: vec![Vec3::ZERO; pixels],
             merged: vec![Vec3::ZERO; pixels],
@@ -201,7 +201,12 @@ impl ChainGather {
     }
 
     /// A state's contributions, each `weight` times.
-    fn add(&mut self, contributions: &[Contribution], weight: f32, merge_normalization: f32) {
+    pub(super) fn add(
+        &mut self,
+        contributions: &[Contribution],
+        weight: f32,
+        merge_normalization: f32,
+    ) {
         for c in contributions {
             let (p, v) = (c.pixel as usize, c.value * weight);
             match c.technique {
@@ -226,7 +231,21 @@ impl ChainGather {
         }
     }
 
-    fn scale(&mut self, s: f32) {
+    /// Adds another worker's gather.
+    pub(super) fn add_gather(&mut self, g: &ChainGather) {
+        for (t, v) in self.value.iter_mut().zip(&g.value) {
+            *t += *v;
+        }
+        for (t, v) in self.merged.iter_mut().zip(&g.merged) {
+            *t += *v;
+        }
+        for (t, v) in self.merged_inner.iter_mut().zip(&g.merged_inner) {
+            *t += *v;
+        }
+        self.shares.add(&g.shares);
+    }
+
+    pub(super) fn scale(&mut self, s: f32) {
         for v in self
             .value
             .iter_mut()
@@ -239,19 +258,76 @@ impl ChainGather {
     }
 }
 
+/// Draws a chain's proposals: the light subpath its primary samples give, joined with a
+/// camera subpath drawn uniformly at each proposal, evaluated whole.
+#[derive(Clone, Debug)]
+pub(super) struct Proposer {
+    pick: Sampler,
+    key: u64,
+    steps: u64,
+    vertices: Vec<LightVertex>,
+}
+
+impl Proposer {
+    pub(super) fn new(seed: u64, key: u64) -> Self {
+        Proposer {
+            pick: Sampler::new(seed ^ PICK_STREAM),
+            key,
+            steps: 0,
+            vertices: Vec::new(),
+        }
+    }
+
+    pub(super) fn memory_bytes(&self) -> usize {
+        self.vertices.capacity() * size_of::<LightVertex>()
+    }
+
+    /// Traces the light subpath of `state` (whose step has started) and evaluates it with a
+    /// camera subpath drawn uniformly into `out`: empty when it brings nothing.
+    pub(super) fn propose(
+        &mut self,
+        setup: &Pass,
+        cameras: &CameraVertices,
+        state: &mut PssSampler,
+        out: &mut Vec<Contribution>,
+        st: &mut PassStats,
+    ) {
+        state.start_stream(LIGHT_STREAM, 0);
+        self.steps += 1;
+        self.pick.start_pixel_sample(self.key, self.steps);
+        let subpaths = cameras.ends.len();
+        let k = ((self.pick.get_1d() * subpaths as f32) as usize).min(subpaths.saturating_sub(1));
+        out.clear();
+        self.vertices.clear();
+        trace_light_subpath(
+            setup,
+            state,
+            &mut self.vertices,
+            &mut |edges, pixel, value| {
+                out.push(Contribution {
+                    pixel: pixel as u32,
+                    value,
+                    technique: Technique::Connection { edges, s: edges },
+                })
+            },
+            st,
+        );
+        if subpaths > 0 {
+            evaluate(setup, cameras, k, &self.vertices, out, st);
+        }
+    }
+}
+
 /// One worker's chain over (light subpath, camera subpath).
 #[derive(Clone, Debug)]
 pub(super) struct LightSubpathChain {
     state: PssSampler,
-    pick: Sampler,
-    key: u64,
-    steps: u64,
+    proposer: Proposer,
     /// The current state's contributions (empty until the pass's first visible sample), and
     /// the iterations it has been held since they were last added.
     current: Vec<Contribution>,
     held: u32,
     proposal: Vec<Contribution>,
-    vertices: Vec<LightVertex>,
     pub(super) counters: ChainCounters,
 }
 
@@ -260,13 +336,10 @@ impl LightSubpathChain {
         let counters = ChainCounters::default();
         LightSubpathChain {
             state: PssSampler::new(seed ^ CHAIN_STREAM, index, counters.mutation_size, 1.0),
-            pick: Sampler::new(seed ^ PICK_STREAM),
-            key: index,
-            steps: 0,
+            proposer: Proposer::new(seed, index),
             current: Vec::new(),
             held: 0,
             proposal: Vec::new(),
-            vertices: Vec::new(),
             counters,
         }
     }
@@ -274,7 +347,7 @@ impl LightSubpathChain {
     fn memory_bytes(&self) -> usize {
         self.state.memory_bytes()
             + (self.current.capacity() + self.proposal.capacity()) * size_of::<Contribution>()
-            + self.vertices.capacity() * size_of::<LightVertex>()
+            + self.proposer.memory_bytes()
     }
 
     /// One iteration: a proposal evaluated into `proposal`, taken when visible; the state it
@@ -292,30 +365,8 @@ impl LightSubpathChain {
         self.state.large_step_prob = c.large_step_prob(!searching, large_step_prob);
         self.state.sigma = c.mutation_size;
         self.state.start_iteration();
-        self.state.start_stream(LIGHT_STREAM, 0);
-        self.steps += 1;
-        self.pick.start_pixel_sample(self.key, self.steps);
-        let subpaths = cameras.ends.len();
-        let k = ((self.pick.get_1d() * subpaths as f32) as usize).min(subpaths.saturating_sub(1));
-        self.proposal.clear();
-        self.vertices.clear();
-        let proposal = &mut self.proposal;
-        trace_light_subpath(
-            setup,
-            &mut self.state,
-            &mut self.vertices,
-            &mut |edges, pixel, value| {
-                proposal.push(Contribution {
-                    pixel: pixel as u32,
-                    value,
-                    technique: Technique::Connection { edges, s: edges },
-                })
-            },
-            st,
-        );
-        if subpaths > 0 {
-            evaluate(setup, cameras, k, &self.vertices, &mut self.proposal, st);
-        }
+        self.proposer
+            .propose(setup, cameras, &mut self.state, &mut self.proposal, st);
         let visible = !self.proposal.is_empty();
         c.record(searching, self.state.is_large_step(), visible);
         if visible {
@@ -464,16 +515,7 @@ impl MetropolisLightSubpaths {
             .end_pass(self.chains.iter().map(|c| &c.counters));
         let mut total = ChainGather::new(pixels);
         for (g, st) in results {
-            for (t, v) in total.value.iter_mut().zip(&g.value) {
-                *t += *v;
-            }
-            for (t, v) in total.merged.iter_mut().zip(&g.merged) {
-                *t += *v;
-            }
-            for (t, v) in total.merged_inner.iter_mut().zip(&g.merged_inner) {
-                *t += *v;
-            }
-            total.shares.add(&g.shares);
+            total.add_gather(&g);
             *stats = *stats + st;
         }
         total.scale(v as f32);
