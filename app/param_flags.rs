@@ -133,8 +133,15 @@ mod tests {
                 );
             }
         }
+        // Every integrator with max_depth shares its default of 64 (the registry's order).
+        let with_depth: Vec<&str> = integrators::registry()
+            .iter()
+            .filter(|i| i.params.iter().any(|p| p.name == "max_depth"))
+            .map(|i| i.name)
+            .collect();
+        assert!(with_depth.len() >= 9, "{with_depth:?}");
         assert!(
-            help.contains("[pt, bdpt, mmlt, ppm, sppm, pppm, amcppm, vcm: default 64]"),
+            help.contains(&format!("[{}: default 64]", with_depth.join(", "))),
             "{help}"
         );
         // Where integrators describe a parameter differently, each description is shown.

@@ -120,47 +120,51 @@ fn merges_and_vcm_converge_to_the_path_tracer() {
 /// alone, and on the Cornell box with glass merges bring part of the light (the caustic).
 #[test]
 fn the_technique_shares_add_up_to_the_image() {
-    use caustica_renderer::geometry::luminance;
-    use caustica_renderer::integrators::Integrator;
-    let cancel = std::sync::atomic::AtomicBool::new(false);
     for (techniques, merges_expected) in [(Techniques::default(), true), (CONNECTIONS, false)] {
         let mut it = vcm(
             context(cornell_box(true), 24, 3),
             techniques,
             &[("max_depth", 5.0)],
         );
-        let passes = 8;
-        for pass in 0..passes {
-            it.render_counted_pass(pass, &cancel).unwrap();
-        }
-        let image: f64 = it
-            .image()
-            .pixels
-            .iter()
-            .map(|p| f64::from(luminance(*p)))
-            .sum();
-        let shares = it.technique_shares();
-        let connections: f64 = shares.lengths.iter().flat_map(|l| &l.connections).sum();
-        let merges: f64 = shares.lengths.iter().flat_map(|l| &l.merges).sum();
-        let total = image * passes as f64;
-        eprintln!(
-            "{techniques:?}: connections {connections:.3}, merges {merges:.3}, image x passes {total:.3}"
-        );
-        assert!(
-            ((connections + merges) / total - 1.0).abs() < 1e-4,
-            "{techniques:?}: shares {} against {total}",
-            connections + merges
-        );
+        let (_, merges, total) = shares_add_up_to_the_image(&mut it, 8);
         assert_eq!(
             merges > 0.01 * total,
             merges_expected,
             "{techniques:?}: merges {merges}"
         );
-        assert_eq!(
-            it.plots().iter().filter(|p| p.plot == "Techniques").count(),
-            6
-        );
     }
+}
+
+/// Renders `passes` passes of `it` and checks that its technique shares add up to its image's
+/// luminance times the passes, with a plot per path length; (connections, merges, that total).
+pub(crate) fn shares_add_up_to_the_image(it: &mut Vcm, passes: u64) -> (f64, f64, f64) {
+    use caustica_renderer::geometry::luminance;
+    use caustica_renderer::integrators::Integrator;
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    for pass in 0..passes {
+        it.render_counted_pass(pass, &cancel).unwrap();
+    }
+    let image: f64 = it
+        .image()
+        .pixels
+        .iter()
+        .map(|p| f64::from(luminance(*p)))
+        .sum();
+    let shares = it.technique_shares();
+    let connections: f64 = shares.lengths.iter().flat_map(|l| &l.connections).sum();
+    let merges: f64 = shares.lengths.iter().flat_map(|l| &l.merges).sum();
+    let total = image * passes as f64;
+    eprintln!("connections {connections:.3}, merges {merges:.3}, image x passes {total:.3}");
+    assert!(
+        ((connections + merges) / total - 1.0).abs() < 1e-4,
+        "shares {} against {total}",
+        connections + merges
+    );
+    assert_eq!(
+        it.plots().iter().filter(|p| p.plot == "Techniques").count(),
+        6
+    );
+    (connections, merges, total)
 }
 
 /// The radius schedule, and its live controls: r_{i+1}^2 = r_i^2 ((i + 1) / (i + 2))^(1 - alpha)

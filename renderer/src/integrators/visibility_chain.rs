@@ -19,6 +19,7 @@
 //! sample on (`ChainCounters::record`, `ChainHistory::visible_fraction`).
 
 use crate::integrators::{ParamSpec, PlotKind, PlotSeries};
+use crate::sampling::pss::PssSampler;
 
 /// The acceptance the mutation size adapts towards (Roberts, Gelman & Gilks 1997).
 pub const TARGET_ACCEPTANCE: f64 = 0.234;
@@ -73,8 +74,16 @@ impl ChainCounters {
 
     /// The probability of a uniform proposal this iteration: 1 until the pass's first visible
     /// sample, whose exact draw from the target starts the chain.
-    pub fn large_step_prob(&self, has_state: bool, large_step_prob: f32) -> f32 {
+    fn large_step_prob(&self, has_state: bool, large_step_prob: f32) -> f32 {
         if has_state { large_step_prob } else { 1.0 }
+    }
+
+    /// Starts a step of `state`: uniform with the pass's probability (always while
+    /// `searching`), else a small step of this chain's size.
+    pub fn start_step(&self, state: &mut PssSampler, searching: bool, large_step_prob: f32) {
+        state.large_step_prob = self.large_step_prob(!searching, large_step_prob);
+        state.sigma = self.mutation_size;
+        state.start_iteration();
     }
 
     /// Counts a proposal; a mutation moves delta by a Robbins-Monro step towards the target

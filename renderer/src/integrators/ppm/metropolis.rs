@@ -69,9 +69,7 @@ impl VisibilityChain {
     ) {
         let c = &mut self.counters;
         let searching = self.current.is_empty();
-        self.state.large_step_prob = c.large_step_prob(!searching, large_step_prob);
-        self.state.sigma = c.mutation_size;
-        self.state.start_iteration();
+        c.start_step(&mut self.state, searching, large_step_prob);
         self.state.start_stream(LIGHT_STREAM, 0);
         self.proposal.clear();
         let proposal = &mut self.proposal;

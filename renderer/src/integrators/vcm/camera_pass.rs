@@ -10,12 +10,14 @@ use super::mis::{
 use super::techniques::TechniqueShares;
 use super::{Pass, light_densities, scatter_with_mis};
 use crate::film::sanitize;
-use crate::integrators::PassStats;
 use crate::integrators::bdpt::connect::{geometry_term, visible};
 use crate::integrators::bdpt::vertex::Vertex;
+use crate::integrators::{Cancelled, PassStats};
 use crate::material::TransportMode;
-use crate::sampling::sampler::SampleSource;
+use crate::sampling::sampler::{SampleSource, Sampler};
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What one camera subpath brings its pixel.
 #[derive(Clone, Copy, Debug, Default)]
@@ -26,6 +28,58 @@ pub(super) struct CameraSample {
     /// that from light vertices within the inner radius (`kernel_bias`).
     pub merged: Vec3,
     pub merged_inner: Vec3,
+}
+
+/// The camera half's skeleton: image rows of `buffer` in parallel, each pixel's sampler keyed
+/// by (seed, pixel, pass) as `pixel_pass`'s and its film position jittered, cancellation
+/// checked per row. `per_pixel` traces a pixel's subpath with its row's own state (from
+/// `new_row`); each row's state, counters and technique shares come back in row order.
+#[allow(clippy::type_complexity)]
+pub(super) fn camera_rows<R: Send>(
+    buffer: &mut [CameraSample],
+    setup: &Pass,
+    (seed, pass): (u64, u64),
+    cancel: &AtomicBool,
+    new_row: impl Fn() -> R + Sync,
+    per_pixel: impl Fn(
+        &mut R,
+        usize,
+        Vec2,
+        &mut Sampler,
+        &mut PassStats,
+        &mut TechniqueShares,
+    ) -> CameraSample
+    + Sync,
+) -> Result<Vec<(R, PassStats, TechniqueShares)>, Cancelled> {
+    let width = setup.camera.width as usize;
+    buffer
+        .par_chunks_mut(width.max(1))
+        .enumerate()
+        .map(|(y, row)| {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
+            }
+            let mut sampler = Sampler::new(seed);
+            let mut state = new_row();
+            let mut stats = PassStats::default();
+            let mut shares = TechniqueShares::default();
+            for (x, out) in row.iter_mut().enumerate() {
+                let pixel = y * width + x;
+                sampler.start_pixel_sample(pixel as u64, pass);
+                let film = Vec2::new(x as f32, y as f32) + sampler.get_2d();
+                *out = per_pixel(
+                    &mut state,
+                    pixel,
+                    film,
+                    &mut sampler,
+                    &mut stats,
+                    &mut shares,
+                );
+                stats.samples += 1;
+            }
+            Ok((state, stats, shares))
+        })
+        .collect()
 }
 
 /// One camera subpath through film position `film`, whose pixel's light subpath is

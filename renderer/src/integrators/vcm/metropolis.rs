@@ -31,7 +31,7 @@ use crate::integrators::visibility_chain::{ChainCounters, ChainHistory, large_st
 use crate::integrators::{Cancelled, ParamSpec, PassStats, PlotSeries};
 use crate::sampling::pss::{LIGHT_STREAM, PssSampler};
 use crate::sampling::sampler::Sampler;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -84,8 +84,7 @@ impl CameraVertices {
 }
 
 /// The camera half of an amcvcm pass into `buffer` (emission found and next-event
-/// estimation), the subpaths' vertices stored: image rows in parallel, each pixel's sampler
-/// keyed by (seed, pixel, pass) as vcm's.
+/// estimation), the subpaths' vertices stored (`camera_pass::camera_rows`).
 pub(super) fn camera_subpaths(
     buffer: &mut [CameraSample],
     setup: &Pass,
@@ -93,56 +92,44 @@ pub(super) fn camera_subpaths(
     pass: u64,
     cancel: &AtomicBool,
 ) -> Result<(CameraVertices, PassStats, TechniqueShares), Cancelled> {
-    let width = setup.camera.width as usize;
-    type Row = (
-        Vec<StoredCameraVertex>,
-        Vec<u32>,
-        PassStats,
-        TechniqueShares,
-    );
-    let rows: Vec<Row> = buffer
-        .par_chunks_mut(width.max(1))
-        .enumerate()
-        .map(|(y, row)| {
-            if cancel.load(Ordering::Relaxed) {
-                return Err(Cancelled);
-            }
-            let mut sampler = Sampler::new(seed);
-            let (mut vertices, mut ends) = (Vec::new(), Vec::with_capacity(width));
-            let mut stats = PassStats::default();
-            let mut shares = TechniqueShares::default();
-            for (x, out) in row.iter_mut().enumerate() {
-                let pixel = (y * width + x) as u32;
-                sampler.start_pixel_sample(u64::from(pixel), pass);
-                let film = Vec2::new(x as f32, y as f32) + sampler.get_2d();
-                *out = camera_pass::trace_camera_techniques(
-                    setup,
-                    film,
-                    &mut sampler,
-                    &mut stats,
-                    &mut shares,
-                    |x, _, _, _| {
-                        vertices.push(StoredCameraVertex {
-                            vertex: *x.vertex,
-                            mis: *x.mis,
-                            path_length: x.path_length,
-                            pixel,
-                        })
-                    },
-                );
-                ends.push(vertices.len() as u32);
-                stats.samples += 1;
-            }
-            Ok((vertices, ends, stats, shares))
-        })
-        .collect::<Result<_, _>>()?;
+    let rows = camera_pass::camera_rows(
+        buffer,
+        setup,
+        (seed, pass),
+        cancel,
+        || (Vec::new(), Vec::new()),
+        |(vertices, ends): &mut (Vec<StoredCameraVertex>, Vec<u32>),
+         pixel,
+         film,
+         sampler,
+         stats,
+         shares| {
+            let out = camera_pass::trace_camera_techniques(
+                setup,
+                film,
+                sampler,
+                stats,
+                shares,
+                |x, _, _, _| {
+                    vertices.push(StoredCameraVertex {
+                        vertex: *x.vertex,
+                        mis: *x.mis,
+                        path_length: x.path_length,
+                        pixel: pixel as u32,
+                    })
+                },
+            );
+            ends.push(vertices.len() as u32);
+            out
+        },
+    )?;
     let mut all = CameraVertices {
-        vertices: Vec::with_capacity(rows.iter().map(|r| r.0.len()).sum()),
+        vertices: Vec::with_capacity(rows.iter().map(|r| r.0.0.len()).sum()),
         ends: Vec::with_capacity(buffer.len()),
         grid: None,
     };
     let (mut stats, mut shares) = (PassStats::default(), TechniqueShares::default());
-    for (vertices, ends, st, sh) in rows {
+    for ((vertices, ends), st, sh) in rows {
         let offset = all.vertices.len() as u32;
         all.ends.extend(ends.iter().map(|e| e + offset));
         all.vertices.extend(vertices);
@@ -362,9 +349,7 @@ impl LightSubpathChain {
     ) {
         let c = &mut self.counters;
         let searching = self.current.is_empty();
-        self.state.large_step_prob = c.large_step_prob(!searching, large_step_prob);
-        self.state.sigma = c.mutation_size;
-        self.state.start_iteration();
+        c.start_step(&mut self.state, searching, large_step_prob);
         self.proposer
             .propose(setup, cameras, &mut self.state, &mut self.proposal, st);
         let visible = !self.proposal.is_empty();

@@ -29,16 +29,13 @@ use crate::integrators::{
     Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PlotKind, PlotSeries, RenderContext,
     params,
 };
-use crate::sampling::sampler::Sampler;
 use crate::scene::Scene;
 use camera_pass::CameraSample;
-use glam::Vec2;
 use glam::Vec3;
 use light_pass::LightVertex;
 use metropolis::MetropolisLightSubpaths;
 use mis::MisWeights;
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use techniques::TechniqueShares;
 
 /// Which techniques a run uses: both in `vcm`; one alone for tests (connections alone are
@@ -451,8 +448,7 @@ fn uniform_pass(
         + grid.as_ref().map_or(0, |g| g.memory_bytes()))
 }
 
-/// The camera half of pass `pass` into `buffer`: image rows in parallel, each pixel's sampler
-/// keyed by (seed, pixel, pass) as `pixel_pass`'s, cancellation checked per row.
+/// The camera half of pass `pass` into `buffer` (`camera_pass::camera_rows`).
 fn camera_pass(
     buffer: &mut [CameraSample],
     setup: &Pass,
@@ -461,42 +457,24 @@ fn camera_pass(
     pass: u64,
     cancel: &AtomicBool,
 ) -> Result<(PassStats, TechniqueShares), Cancelled> {
-    let width = setup.camera.width as usize;
-    let rows: Vec<(PassStats, TechniqueShares)> = buffer
-        .par_chunks_mut(width.max(1))
-        .enumerate()
-        .map(|(y, row)| {
-            if cancel.load(Ordering::Relaxed) {
-                return Err(Cancelled);
-            }
-            let mut sampler = Sampler::new(seed);
-            let mut stats = PassStats::default();
-            let mut shares = TechniqueShares::default();
-            for (x, out) in row.iter_mut().enumerate() {
-                let pixel = y * width + x;
-                sampler.start_pixel_sample(pixel as u64, pass);
-                let film = Vec2::new(x as f32, y as f32) + sampler.get_2d();
-                let start = if pixel == 0 {
-                    0
-                } else {
-                    ends[pixel - 1] as usize
-                };
-                let own = &setup.light_vertices[start..ends[pixel] as usize];
-                *out = camera_pass::trace_camera_subpath(
-                    setup,
-                    film,
-                    own,
-                    &mut sampler,
-                    &mut stats,
-                    &mut shares,
-                );
-                stats.samples += 1;
-            }
-            Ok((stats, shares))
-        })
-        .collect::<Result<_, _>>()?;
+    let rows = camera_pass::camera_rows(
+        buffer,
+        setup,
+        (seed, pass),
+        cancel,
+        || (),
+        |_, pixel, film, sampler, stats, shares| {
+            let start = if pixel == 0 {
+                0
+            } else {
+                ends[pixel - 1] as usize
+            };
+            let own = &setup.light_vertices[start..ends[pixel] as usize];
+            camera_pass::trace_camera_subpath(setup, film, own, sampler, stats, shares)
+        },
+    )?;
     let mut total = (PassStats::default(), TechniqueShares::default());
-    for (stats, shares) in rows {
+    for ((), stats, shares) in rows {
         total.0 = total.0 + stats;
         total.1.add(&shares);
     }
