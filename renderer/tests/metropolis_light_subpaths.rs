@@ -2,7 +2,7 @@
 //! closed forms, the path tracer, bdpt where light subpaths rarely reach what the camera
 //! sees, and at the extremes of the large-step probability.
 
-const CHAINED: [&str; 1] = ["amcvcm"];
+const CHAINED: [&str; 2] = ["amcvcm", "mvcm"];
 
 use caustica_renderer::camera::Camera;
 use caustica_renderer::integrators::{Integrator, RenderContext, find};

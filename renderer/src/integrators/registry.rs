@@ -98,6 +98,14 @@ static REGISTRY: &[IntegratorInfo] = &[
         create: vcm::create_amcvcm,
         bytes_per_pixel: 1200,
     },
+    IntegratorInfo {
+        name: "mvcm",
+        title: "Metropolised bidirectional estimator",
+        description: "Šik et al. 2016: vcm whose light subpaths come from a visibility chain and a contribution chain, combined by their MIS.",
+        params: vcm::VcmSettings::METROPOLIS_PARAMS,
+        create: vcm::create_mvcm,
+        bytes_per_pixel: 1200,
+    },
 ];
 
 pub fn registry() -> &'static [IntegratorInfo] {

@@ -81,6 +81,11 @@ impl PssSampler {
         self.key = key;
     }
 
+    /// The key its mutations are drawn by.
+    pub fn key(&self) -> u64 {
+        self.key
+    }
+
     pub fn is_large_step(&self) -> bool {
         self.large_step
     }

@@ -156,6 +156,17 @@ pub(super) struct Contribution {
     technique: Technique,
 }
 
+impl Contribution {
+    /// Its luminance in the image (a merge's with its normalisation).
+    pub(super) fn luminance(&self, merge_normalization: f32) -> f32 {
+        let l = crate::geometry::luminance(self.value);
+        match self.technique {
+            Technique::Connection { .. } => l,
+            Technique::Merge { .. } => l * merge_normalization,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Technique {
     /// A connection (t = 1 included) on a path of `edges` edges with `s` light vertices.
@@ -267,6 +278,11 @@ impl Proposer {
 
     pub(super) fn memory_bytes(&self) -> usize {
         self.vertices.capacity() * size_of::<LightVertex>()
+    }
+
+    /// A uniform number for this proposal's accept/reject decision.
+    pub(super) fn uniform(&mut self) -> f32 {
+        self.pick.get_1d()
     }
 
     /// Traces the light subpath of `state` (whose step has started) and evaluates it with a

@@ -16,6 +16,7 @@ mod camera_pass;
 pub mod light_densities;
 mod light_pass;
 pub mod metropolis;
+pub mod metropolised;
 pub mod mis;
 pub mod techniques;
 
@@ -34,6 +35,7 @@ use camera_pass::CameraSample;
 use glam::Vec3;
 use light_pass::LightVertex;
 use metropolis::MetropolisLightSubpaths;
+use metropolised::MetropolisedLightSubpaths;
 use mis::MisWeights;
 use std::sync::atomic::AtomicBool;
 use techniques::TechniqueShares;
@@ -111,6 +113,75 @@ pub fn create_amcvcm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator>
     )
 }
 
+/// vcm whose light subpaths come from a visibility and a contribution chain combined by
+/// their MIS (`metropolised.rs`).
+pub fn create_mvcm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
+    let large_step_prob = params::param_value(VcmSettings::METROPOLIS_PARAMS, p, "large_step");
+    let chains =
+        ChainedLightSubpaths::Metropolised(MetropolisedLightSubpaths::new(large_step_prob as f32));
+    let mut vcm = Vcm::new(ctx, VcmSettings::from_params(p));
+    vcm.metropolis = Some(chains);
+    Box::new(vcm)
+}
+
+/// Where a pass's light subpaths come from when not independent.
+#[derive(Clone, Debug)]
+pub enum ChainedLightSubpaths {
+    /// Visibility chains (amcvcm).
+    Visibility(MetropolisLightSubpaths),
+    /// Visibility and contribution chains (mvcm).
+    Metropolised(MetropolisedLightSubpaths),
+}
+
+impl ChainedLightSubpaths {
+    fn memory_bytes(&self) -> usize {
+        match self {
+            Self::Visibility(m) => m.memory_bytes(),
+            Self::Metropolised(m) => m.memory_bytes(),
+        }
+    }
+
+    fn set_large_step_prob(&mut self, p: f32) {
+        match self {
+            Self::Visibility(m) => m.large_step_prob = p,
+            Self::Metropolised(m) => m.large_step_prob = p,
+        }
+    }
+
+    fn statistics(&self) -> serde_json::Value {
+        match self {
+            Self::Visibility(m) => m.statistics(),
+            Self::Metropolised(m) => m.statistics(),
+        }
+    }
+
+    fn plots(&self) -> Vec<PlotSeries> {
+        match self {
+            Self::Visibility(m) => m.plots(),
+            Self::Metropolised(m) => m.plots(),
+        }
+    }
+
+    fn light_subpaths(
+        &mut self,
+        setup: &Pass,
+        cameras: &metropolis::CameraVertices,
+        light_paths: u64,
+        seed: u64,
+        cancel: &AtomicBool,
+        stats: &mut PassStats,
+    ) -> Result<metropolis::ChainGather, Cancelled> {
+        match self {
+            Self::Visibility(m) => {
+                m.light_subpaths(setup, cameras, light_paths, seed, cancel, stats)
+            }
+            Self::Metropolised(m) => {
+                m.light_subpaths(setup, cameras, light_paths, seed, cancel, stats)
+            }
+        }
+    }
+}
+
 const MAX_HISTORY: usize = 2048;
 /// The automatic radius as a share of the photon mappers' (four pixel footprints): one
 /// footprint. Where connections sample a path well, a merge only adds its kernel's bias and
@@ -156,8 +227,9 @@ pub struct Vcm {
     /// (passes, radius), thinned to stay bounded.
     radius_history: Vec<[f64; 2]>,
     history_stride: u64,
-    /// Light subpaths from visibility chains (`metropolis.rs`) in place of independent ones.
-    metropolis: Option<MetropolisLightSubpaths>,
+    /// Light subpaths from chains (`metropolis.rs`, `metropolised.rs`) in place of
+    /// independent ones.
+    metropolis: Option<ChainedLightSubpaths>,
 }
 
 impl Vcm {
@@ -190,7 +262,9 @@ impl Vcm {
 
     /// The same estimator with light subpaths from visibility chains (`metropolis.rs`).
     pub fn with_metropolis_light_subpaths(mut self, large_step_prob: f32) -> Self {
-        self.metropolis = Some(MetropolisLightSubpaths::new(large_step_prob));
+        self.metropolis = Some(ChainedLightSubpaths::Visibility(
+            MetropolisLightSubpaths::new(large_step_prob),
+        ));
         self
     }
 
@@ -352,7 +426,7 @@ impl Integrator for Vcm {
             // shrunk as far as the passes so far would have shrunk it.
             "large_step" => {
                 if let Some(m) = &mut self.metropolis {
-                    m.large_step_prob = value as f32;
+                    m.set_large_step_prob(value as f32);
                 }
             }
             "radius" => {

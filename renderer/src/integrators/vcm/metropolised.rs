@@ -1,0 +1,505 @@
+//! The Metropolised bidirectional estimator over vcm (`mvcm`; Šik, Otsu, Hachisuka &
+//! Křivánek 2016, "Robust light transport simulation via Metropolised bidirectional
+//! estimators"): light subpaths from two chains per worker, one whose target is their
+//! visibility V (amcvcm's, `metropolis.rs`) and one whose target is their contribution C to
+//! the image, combined by multiple importance sampling over the chains; camera subpaths stay
+//! independent per pixel, and connections and merges are vcm's, as in amcvcm.
+//!
+//! The state and what a proposal brings are amcvcm's: (u, k), a light subpath and a camera
+//! subpath drawn uniformly, evaluated whole as g(u, k) (`Proposer`). C is the luminance of g
+//! (every technique with its MIS weight and normalisation). Both targets change every pass
+//! with the camera subpaths, so both chains start afresh each pass from an exact (or
+//! exactly weighted) draw of this pass's target, and iterations alternate between them:
+//!
+//! - The visibility chain is amcvcm's: it searches uniform samples for its first visible
+//!   one (an exact draw from V / b_v), then proposes uniform samples with probability
+//!   `large_step` and small steps otherwise, accepted when visible. b_v is this pass's
+//!   visible fraction of uniform samples.
+//! - The contribution chain is a Kelemen chain over C: the same mixture of uniform samples
+//!   and small steps, accepted with probability min(1, C' / C). It starts from a bootstrap
+//!   (Veach 1997, section 11.3.3, start-up bias elimination): B uniform samples, one of
+//!   them picked with probability proportional to C, and the chain's states weighted by
+//!   b_B, the mean C of the bootstrap, in place of the unknown b_c. A chain started from the
+//!   visibility chain's state instead (as the paper's code does) is distributed like V, not
+//!   C, for the many iterations its small steps need to mix; the MIS weights then read its
+//!   few bright states as a density it does not have (the door 15 % dark at 32 x 32, 4 % at
+//!   128; DESIGN.md section 5d).
+//!
+//! Markov-chain MIS (the paper's section 4), the balance heuristic over the chains' planned
+//! iterations n_v and n_c with p_v = V / b~_v and p_c = C / b~_c: each state is weighted by
+//! its chain's normalisation over its iterations times n_u p_u / (n_v p_v + n_c p_c). Any
+//! weights that add up to one keep the estimate unbiased, so b~_v and b~_c are the means of
+//! b_v and b_B over earlier passes (independent of this pass's samples); this pass's own
+//! come in only as each chain's normalisation. The sum over a worker's states, times its
+//! iterations, estimates what its share of N_L independent light subpaths would bring.
+//! No replica exchange: it would couple the visibility chain to the contribution chain's
+//! weighted start, and no weight then keeps the visibility chain's half unbiased.
+
+use super::Pass;
+use super::metropolis::{CameraVertices, ChainGather, Contribution, Proposer};
+use crate::integrators::visibility_chain::{
+    ChainCounters, ChainHistory, INITIAL_MUTATION_SIZE, TARGET_ACCEPTANCE,
+};
+use crate::integrators::{Cancelled, PassStats, PlotSeries};
+use crate::sampling::pss::PssSampler;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+const CHAIN_STREAM: u64 = 0x5ca1_ab1e_0035_0013;
+const CONTRIBUTION_KEY: u64 = 1 << 40;
+/// The bootstrap's share of a worker's iterations this pass: 1 / BOOTSTRAP_SHARE.
+const BOOTSTRAP_SHARE: u64 = 8;
+
+/// A chain's state: its primary samples, what they bring and their C, and the iterations
+/// held since that was last recorded.
+#[derive(Clone, Debug)]
+struct ChainState {
+    pss: PssSampler,
+    current: Vec<Contribution>,
+    c: f32,
+    held: u32,
+}
+
+impl ChainState {
+    fn new(seed: u64, key: u64) -> Self {
+        ChainState {
+            pss: PssSampler::new(seed ^ CHAIN_STREAM, key, INITIAL_MUTATION_SIZE, 1.0),
+            current: Vec::new(),
+            c: 0.0,
+            held: 0,
+        }
+    }
+
+    /// Takes the proposal in `proposal` (its C `c`), recording what the state held.
+    fn take(&mut self, proposal: &mut Vec<Contribution>, c: f32, out: &mut Records, chain: Chain) {
+        self.pss.accept();
+        out.record(self, chain);
+        std::mem::swap(&mut self.current, proposal);
+        self.c = c;
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Chain {
+    Visibility,
+    Contribution,
+}
+
+/// A state a chain held: its contributions' range in the arena, the iterations it was
+/// held, its C, the chain.
+#[derive(Clone, Copy, Debug)]
+struct Record {
+    start: u32,
+    len: u32,
+    held: u32,
+    c: f32,
+    chain: Chain,
+}
+
+/// A worker's states this pass.
+#[derive(Clone, Debug, Default)]
+struct Records {
+    records: Vec<Record>,
+    arena: Vec<Contribution>,
+}
+
+impl Records {
+    /// Records what `state` held since it was last recorded.
+    fn record(&mut self, state: &mut ChainState, chain: Chain) {
+        if state.held > 0 && !state.current.is_empty() {
+            self.records.push(Record {
+                start: self.arena.len() as u32,
+                len: state.current.len() as u32,
+                held: state.held,
+                c: state.c,
+                chain,
+            });
+            self.arena.extend_from_slice(&state.current);
+        }
+        state.held = 0;
+    }
+
+    fn clear(&mut self) {
+        self.records.clear();
+        self.arena.clear();
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.records.capacity() * size_of::<Record>()
+            + self.arena.capacity() * size_of::<Contribution>()
+    }
+}
+
+fn total_c(contributions: &[Contribution], merge_normalization: f32) -> f32 {
+    contributions
+        .iter()
+        .map(|c| c.luminance(merge_normalization))
+        .sum()
+}
+
+/// The MIS quantities a pass's states are weighted by: the chains' planned iterations and
+/// the earlier passes' normalisations (module docs).
+#[derive(Clone, Copy, Debug)]
+struct Balance {
+    n_v: f64,
+    n_c: f64,
+    b_v: f64,
+    b_c: f64,
+}
+
+impl Balance {
+    /// n_v p_v + n_c p_c at a visible state of contribution `c`.
+    fn density(&self, c: f32) -> f64 {
+        self.n_v / self.b_v + self.n_c * f64::from(c) / self.b_c
+    }
+}
+
+/// One worker's two chains.
+#[derive(Clone, Debug)]
+struct ChainPair {
+    visibility: ChainState,
+    contribution: ChainState,
+    proposer: Proposer,
+    proposal: Vec<Contribution>,
+    /// The visibility chain's counters (amcvcm's).
+    counters: ChainCounters,
+    /// The contribution chain's mutation size, mutations and accepted ones (over the run).
+    contribution_size: f32,
+    contribution_mutations: u64,
+    contribution_accepted: u64,
+    /// This pass: the bootstrap's samples and sum of C, the iterations the visibility chain
+    /// held a state, each chain's planned iterations, the states held.
+    bootstrap: u64,
+    bootstrap_c: f64,
+    held_visibility: u64,
+    planned: (u64, u64),
+    records: Records,
+}
+
+impl ChainPair {
+    fn new(seed: u64, index: u64) -> Self {
+        ChainPair {
+            visibility: ChainState::new(seed, index),
+            contribution: ChainState::new(seed, index | CONTRIBUTION_KEY),
+            proposer: Proposer::new(seed ^ CHAIN_STREAM, index),
+            proposal: Vec::new(),
+            counters: ChainCounters::default(),
+            contribution_size: INITIAL_MUTATION_SIZE,
+            contribution_mutations: 0,
+            contribution_accepted: 0,
+            bootstrap: 0,
+            bootstrap_c: 0.0,
+            held_visibility: 0,
+            planned: (0, 0),
+            records: Records::default(),
+        }
+    }
+
+    fn memory_bytes(&self) -> usize {
+        let contributions = self.visibility.current.capacity()
+            + self.contribution.current.capacity()
+            + self.proposal.capacity();
+        self.visibility.pss.memory_bytes()
+            + self.contribution.pss.memory_bytes()
+            + self.proposer.memory_bytes()
+            + contributions * size_of::<Contribution>()
+            + self.records.memory_bytes()
+    }
+
+    /// Runs a pass of `iterations`: the bootstrap, then the chains in turn.
+    fn run(
+        &mut self,
+        setup: &Pass,
+        cameras: &CameraVertices,
+        iterations: u64,
+        large_step_prob: f32,
+        cancel: &AtomicBool,
+    ) -> Result<PassStats, Cancelled> {
+        let mut st = PassStats::default();
+        self.counters.start_pass();
+        for s in [&mut self.visibility, &mut self.contribution] {
+            s.current.clear();
+            s.held = 0;
+        }
+        (self.bootstrap, self.bootstrap_c, self.held_visibility) = (0, 0.0, 0);
+        self.records.clear();
+        let bootstrap = iterations.div_ceil(BOOTSTRAP_SHARE);
+        let rest = iterations - bootstrap;
+        self.planned = (rest.div_ceil(2), rest / 2);
+        for j in 0..iterations {
+            if j % 256 == 0 && cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
+            }
+            if j < bootstrap {
+                self.bootstrap_step(setup, cameras, &mut st);
+            } else if (j - bootstrap) % 2 == 0 {
+                self.visibility_step(setup, cameras, large_step_prob, &mut st);
+            } else {
+                self.contribution_step(setup, cameras, large_step_prob, &mut st);
+            }
+        }
+        self.records
+            .record(&mut self.visibility, Chain::Visibility);
+        self.records
+            .record(&mut self.contribution, Chain::Contribution);
+        Ok(st)
+    }
+
+    /// One bootstrap sample: uniform, counted for the visible fraction and b_B, and taken as
+    /// the contribution chain's start with probability C / (the bootstrap's sum of C so far)
+    /// (weighted reservoir sampling: the pick is proportional to C over the bootstrap).
+    fn bootstrap_step(&mut self, setup: &Pass, cameras: &CameraVertices, st: &mut PassStats) {
+        let s = &mut self.contribution;
+        s.pss.large_step_prob = 1.0;
+        s.pss.start_iteration();
+        self.proposer
+            .propose(setup, cameras, &mut s.pss, &mut self.proposal, st);
+        let c = total_c(&self.proposal, setup.merge_normalization);
+        self.counters.record(false, true, !self.proposal.is_empty());
+        self.bootstrap += 1;
+        self.bootstrap_c += f64::from(c);
+        if c > 0.0 && f64::from(self.proposer.uniform()) * self.bootstrap_c < f64::from(c) {
+            s.pss.accept();
+            std::mem::swap(&mut s.current, &mut self.proposal);
+            s.c = c;
+        } else {
+            s.pss.reject();
+        }
+    }
+
+    /// One iteration of the visibility chain (amcvcm's).
+    fn visibility_step(
+        &mut self,
+        setup: &Pass,
+        cameras: &CameraVertices,
+        large_step_prob: f32,
+        st: &mut PassStats,
+    ) {
+        let s = &mut self.visibility;
+        let searching = s.current.is_empty();
+        self.counters
+            .start_step(&mut s.pss, searching, large_step_prob);
+        self.proposer
+            .propose(setup, cameras, &mut s.pss, &mut self.proposal, st);
+        let visible = !self.proposal.is_empty();
+        self.counters
+            .record(searching, s.pss.is_large_step(), visible);
+        let c = total_c(&self.proposal, setup.merge_normalization);
+        if visible && c > 0.0 {
+            s.take(&mut self.proposal, c, &mut self.records, Chain::Visibility);
+        } else {
+            s.pss.reject();
+        }
+        if !s.current.is_empty() {
+            s.held += 1;
+            self.held_visibility += 1;
+            self.counters.chain_samples += 1;
+        }
+    }
+
+    /// One iteration of the contribution chain: a uniform sample with probability
+    /// `large_step_prob`, else a small step; accepted with min(1, C' / C). Its small steps'
+    /// size adapts towards acceptance 0.234 as the visibility chain's.
+    fn contribution_step(
+        &mut self,
+        setup: &Pass,
+        cameras: &CameraVertices,
+        large_step_prob: f32,
+        st: &mut PassStats,
+    ) {
+        let s = &mut self.contribution;
+        if s.current.is_empty() {
+            // Nothing in the bootstrap brought anything: b_B = 0 weighs this chain out.
+            return;
+        }
+        s.pss.large_step_prob = large_step_prob;
+        s.pss.sigma = self.contribution_size;
+        s.pss.start_iteration();
+        self.proposer
+            .propose(setup, cameras, &mut s.pss, &mut self.proposal, st);
+        let c = total_c(&self.proposal, setup.merge_normalization);
+        let accept = c > 0.0 && self.proposer.uniform() < c / s.c;
+        if !s.pss.is_large_step() {
+            self.contribution_mutations += 1;
+            self.contribution_accepted += u64::from(accept);
+            let step = (f64::from(u8::from(accept)) - TARGET_ACCEPTANCE)
+                / self.contribution_mutations as f64;
+            self.contribution_size = (self.contribution_size + step as f32).clamp(1e-5, 0.5);
+        }
+        if accept {
+            s.take(&mut self.proposal, c, &mut self.records, Chain::Contribution);
+        } else {
+            s.pss.reject();
+        }
+        s.held += 1;
+    }
+
+    /// This pass's states weighted by the balance heuristic over both chains (module docs),
+    /// times the worker's `iterations`, into a gather. `b_v` is this pass's visible
+    /// fraction.
+    fn gather(
+        &self,
+        pixels: usize,
+        iterations: u64,
+        b_v: f64,
+        balance: Balance,
+        merge_normalization: f32,
+    ) -> ChainGather {
+        let mut gather = ChainGather::new(pixels);
+        let b_b = if self.bootstrap == 0 {
+            0.0
+        } else {
+            self.bootstrap_c / self.bootstrap as f64
+        };
+        let n = iterations as f64;
+        for r in &self.records.records {
+            let density = balance.density(r.c);
+            if !(density > 0.0) {
+                continue;
+            }
+            // Visibility: b_v / (iterations held) x n_v p_v / density, with V = 1;
+            // contribution: b_B / n_c x n_c p_c / (C density), p_c = C / b~_c.
+            let weight = match r.chain {
+                Chain::Visibility if self.held_visibility > 0 => {
+                    b_v / self.held_visibility as f64 * balance.n_v / balance.b_v / density
+                }
+                Chain::Visibility => 0.0,
+                Chain::Contribution => b_b / balance.b_c / density,
+            };
+            let weight = n * f64::from(r.held) * weight;
+            let contributions =
+                &self.records.arena[r.start as usize..(r.start + r.len) as usize];
+            gather.add(contributions, weight as f32, merge_normalization);
+        }
+        gather
+    }
+}
+
+/// mvcm's light subpaths: a pair of chains per worker, and what the viewer plots of them.
+#[derive(Clone, Debug, Default)]
+pub struct MetropolisedLightSubpaths {
+    /// Both chains' probability of a uniform proposal.
+    pub large_step_prob: f32,
+    pairs: Vec<ChainPair>,
+    history: ChainHistory,
+    /// Earlier passes: their count and the sums of their b_v and b_B (the MIS weights').
+    passes: u64,
+    b_v_sum: f64,
+    b_c_sum: f64,
+}
+
+impl MetropolisedLightSubpaths {
+    pub fn new(large_step_prob: f32) -> Self {
+        MetropolisedLightSubpaths {
+            large_step_prob,
+            ..Default::default()
+        }
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        self.pairs.iter().map(|p| p.memory_bytes()).sum::<usize>() + self.history.memory_bytes()
+    }
+
+    /// The light half of a pass: `light_paths` iterations shared among the workers' pairs
+    /// of chains, weighted by the balance heuristic over the chains.
+    pub(super) fn light_subpaths(
+        &mut self,
+        setup: &Pass,
+        cameras: &CameraVertices,
+        light_paths: u64,
+        seed: u64,
+        cancel: &AtomicBool,
+        stats: &mut PassStats,
+    ) -> Result<ChainGather, Cancelled> {
+        let workers = rayon::current_num_threads().max(1);
+        if self.pairs.len() != workers {
+            self.pairs = (0..workers as u64)
+                .map(|i| ChainPair::new(seed, i))
+                .collect();
+        }
+        self.history
+            .start_pass(self.pairs.iter().map(|p| &p.counters));
+        let count = self.pairs.len() as u64;
+        let share = |i: usize| light_paths / count + u64::from((i as u64) < light_paths % count);
+        let large_step_prob = self.large_step_prob;
+        let results: Vec<PassStats> = self
+            .pairs
+            .par_iter_mut()
+            .enumerate()
+            .map(|(i, pair)| pair.run(setup, cameras, share(i), large_step_prob, cancel))
+            .collect::<Result<_, _>>()?;
+        let b_v = self
+            .history
+            .visible_fraction(self.pairs.iter().map(|p| &p.counters));
+        self.history
+            .end_pass(self.pairs.iter().map(|p| &p.counters));
+        let (bootstrap, bootstrap_c) = self.pairs.iter().fold((0, 0.0), |(n, c), p| {
+            (n + p.bootstrap, c + p.bootstrap_c)
+        });
+        let b_c = if bootstrap == 0 {
+            0.0
+        } else {
+            bootstrap_c / bootstrap as f64
+        };
+        // The weights' normalisations are earlier passes' (the first pass has only its own).
+        let (b_v_w, b_c_w) = if self.passes == 0 {
+            (b_v, b_c)
+        } else {
+            let n = self.passes as f64;
+            (self.b_v_sum / n, self.b_c_sum / n)
+        };
+        (self.passes, self.b_v_sum, self.b_c_sum) =
+            (self.passes + 1, self.b_v_sum + b_v, self.b_c_sum + b_c);
+        let pixels = cameras.ends.len();
+        let mut total = ChainGather::new(pixels);
+        for st in results {
+            *stats = *stats + st;
+        }
+        if !(b_v_w > 0.0 && b_c_w > 0.0) {
+            // Nothing was visible before this pass; the weights below need both.
+            return Ok(total);
+        }
+        let gathers: Vec<ChainGather> = self
+            .pairs
+            .par_iter()
+            .enumerate()
+            .map(|(i, pair)| {
+                let (n_v, n_c) = pair.planned;
+                let balance = Balance {
+                    n_v: n_v as f64,
+                    n_c: n_c as f64,
+                    b_v: b_v_w,
+                    b_c: b_c_w,
+                };
+                pair.gather(pixels, share(i), b_v, balance, setup.merge_normalization)
+            })
+            .collect();
+        for g in &gathers {
+            total.add_gather(g);
+        }
+        Ok(total)
+    }
+
+    /// The run's counters for `--stats`: the visibility chains' (amcvcm's) and the
+    /// contribution chains' acceptance and mutation sizes.
+    pub fn statistics(&self) -> serde_json::Value {
+        let mut s = self
+            .history
+            .statistics(self.pairs.iter().map(|p| &p.counters));
+        let (m, a) = self.pairs.iter().fold((0, 0), |(m, a), p| {
+            (m + p.contribution_mutations, a + p.contribution_accepted)
+        });
+        s["contribution_chain"] = serde_json::json!({
+            "mutations": m,
+            "accepted": a,
+            "acceptance": if m == 0 { 0.0 } else { a as f64 / m as f64 },
+            "mutation_sizes": self.pairs.iter().map(|p| p.contribution_size).collect::<Vec<_>>(),
+            "mean_bootstrap_contribution": if self.passes == 0 { 0.0 } else { self.b_c_sum / self.passes as f64 },
+        });
+        s
+    }
+
+    pub fn plots(&self) -> Vec<PlotSeries> {
+        self.history.plots("light subpaths")
+    }
+}
