@@ -227,10 +227,11 @@ fn on_the_uniform_closed_form_every_estimate_tracks_the_true_error() {
         pixels: vec![glam::Vec3::ONE; 24 * 24],
     };
     let photons = [("radius", 0.1), ("photons", 10_000.0)];
-    let runs: [(&str, common::Params, &[u64]); 9] = [
+    let runs: [(&str, common::Params, &[u64]); 10] = [
         ("pt", &[], &[2, 8, 32, 128, 512]),
         ("vcm", &[], &[2, 8, 32, 128]),
         ("amcvcm", &[], &[2, 8, 32, 128]),
+        ("mvcm", &[], &[2, 8, 32, 128]),
         ("amcppm", &photons, &[2, 8, 32, 128]),
         ("bdpt", &[], &[2, 8, 32, 128]),
         ("mmlt", &[("bootstrap", 10_000.0)], &[4, 16, 64, 256]),

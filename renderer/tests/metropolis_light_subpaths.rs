@@ -1,4 +1,5 @@
-//! vcm whose light subpaths come from Markov chains (amcvcm: visibility chains), against the
+//! vcm whose light subpaths come from Markov chains (amcvcm: visibility chains; mvcm:
+//! visibility and contribution chains with the uniform bootstrap, by their MIS), against the
 //! closed forms, the path tracer, bdpt where light subpaths rarely reach what the camera
 //! sees, and at the extremes of the large-step probability.
 
@@ -104,22 +105,35 @@ fn chained_vcm_agrees_with_bdpt_where_light_subpaths_are_rarely_visible() {
 }
 
 /// The technique shares the viewer plots carry the chains' weights: over every path length
-/// and technique they add up to amcvcm's image luminance times the passes, as vcm's do
-/// (`vertex_merging::shares_add_up_to_the_image`), and merges bring part of the light on the
-/// Cornell box with glass.
+/// and technique they add up to amcvcm's and mvcm's image luminance times the passes, as
+/// vcm's do (`vertex_merging::shares_add_up_to_the_image`), and merges bring part of the
+/// light on the Cornell box with glass. mvcm plots its contribution chains beside the
+/// visibility chains.
 #[test]
-fn amcvcm_technique_shares_add_up_to_the_image() {
+fn chained_vcm_technique_shares_add_up_to_the_image() {
     use caustica_renderer::integrators::vcm::{Vcm, VcmSettings};
-    let scene = Arc::new(Scene::build(cornell_box(true)).unwrap());
-    let camera = Camera::new(&scene.camera, 24, 24);
-    let ctx = RenderContext {
-        scene,
-        camera,
-        seed: 3,
-    };
-    let settings = VcmSettings::from_params(&[("max_depth".to_string(), 5.0)].into());
-    let mut it = Vcm::new(ctx, settings).with_metropolis_light_subpaths(0.3);
-    let (_, merges, total) = crate::vertex_merging::shares_add_up_to_the_image(&mut it, 8);
-    assert!(merges > 0.01 * total, "merges {merges}");
-    assert!(it.plots().iter().any(|p| p.plot == "Visibility"));
+    for metropolised in [false, true] {
+        let scene = Arc::new(Scene::build(cornell_box(true)).unwrap());
+        let camera = Camera::new(&scene.camera, 24, 24);
+        let ctx = RenderContext {
+            scene,
+            camera,
+            seed: 3,
+        };
+        let settings = VcmSettings::from_params(&[("max_depth".to_string(), 5.0)].into());
+        let vcm = Vcm::new(ctx, settings);
+        let mut it = if metropolised {
+            vcm.with_metropolised_light_subpaths(0.3)
+        } else {
+            vcm.with_metropolis_light_subpaths(0.3)
+        };
+        let (_, merges, total) = crate::vertex_merging::shares_add_up_to_the_image(&mut it, 8);
+        assert!(merges > 0.01 * total, "merges {merges}");
+        let plots = it.plots();
+        assert!(plots.iter().any(|p| p.plot == "Visibility"));
+        assert_eq!(
+            plots.iter().any(|p| p.name.contains("contribution chain")),
+            metropolised
+        );
+    }
 }

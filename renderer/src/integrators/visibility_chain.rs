@@ -86,9 +86,8 @@ impl ChainCounters {
         state.start_iteration();
     }
 
-    /// Counts a proposal; a mutation moves delta by a Robbins-Monro step towards the target
-    /// acceptance (the paper's adaptation): delta += (accepted - 0.234) / mutations.
-    /// `searching`: the chain had no state yet, and the uniform samples it drew until the
+    /// Counts a proposal of a chain whose target is visibility (a mutation as
+    /// `count_mutation`). `searching`: the chain had no state yet, and the uniform samples it drew until the
     /// first visible one are not counted. That search stops at a success, so counted it would
     /// estimate the visible fraction high (by about one sample in the count: 4 % on the door
     /// at 32 x 32, where a chain saw three visible uniform samples a pass); after it, uniform
@@ -102,12 +101,18 @@ impl ChainCounters {
             self.uniform += 1;
             self.uniform_visible += u64::from(visible);
         } else {
-            self.mutations += 1;
-            self.accepted += u64::from(visible);
-            let step = (f64::from(u8::from(visible)) - TARGET_ACCEPTANCE) / self.mutations as f64;
-            self.mutation_size = (self.mutation_size + step as f32)
-                .clamp(MUTATION_SIZE_RANGE.0, MUTATION_SIZE_RANGE.1);
+            self.count_mutation(visible);
         }
+    }
+
+    /// Counts a small step, taken or not, and moves delta by a Robbins-Monro step towards the
+    /// target acceptance (the paper's adaptation): delta += (accepted - 0.234) / mutations.
+    pub fn count_mutation(&mut self, accepted: bool) {
+        self.mutations += 1;
+        self.accepted += u64::from(accepted);
+        let step = (f64::from(u8::from(accepted)) - TARGET_ACCEPTANCE) / self.mutations as f64;
+        self.mutation_size =
+            (self.mutation_size + step as f32).clamp(MUTATION_SIZE_RANGE.0, MUTATION_SIZE_RANGE.1);
     }
 
     /// The weight of this pass's states over `iterations` iterations before the visible

@@ -17,17 +17,19 @@
 //!   visible fraction of uniform samples.
 //! - The contribution chain is a Kelemen chain over C: the same mixture of uniform samples
 //!   and small steps, accepted with probability min(1, C' / C). It starts from a bootstrap
-//!   (Veach 1997, section 11.3.3, start-up bias elimination): B uniform samples, one of
-//!   them picked with probability proportional to C, and the chain's states weighted by
-//!   b_B, the mean C of the bootstrap, in place of the unknown b_c. A chain started from the
-//!   visibility chain's state instead (as the paper's code does) is distributed like V, not
-//!   C, for the many iterations its small steps need to mix; the MIS weights then read its
-//!   few bright states as a density it does not have (the door 15 % dark at 32 x 32, 4 % at
-//!   128; DESIGN.md section 5d).
+//!   (Veach 1997, section 11.3.3, start-up bias elimination): B uniform samples (an eighth
+//!   of the worker's iterations), one of them picked with probability proportional to C,
+//!   and the chain's states weighted by b_B, the mean C of the bootstrap, in place of the
+//!   unknown b_c. A chain started from the visibility chain's state instead (as the paper's
+//!   public implementation does) is distributed like V, not C, for the many iterations its
+//!   small steps need to mix; the MIS weights then read its few bright states as a density
+//!   it does not have (the door 15 % dark at 32 x 32, 4 % at 128; DESIGN.md section 5d).
 //!
-//! Markov-chain MIS (the paper's section 4), the balance heuristic over the chains' planned
-//! iterations n_v and n_c with p_v = V / b~_v and p_c = C / b~_c: each state is weighted by
-//! its chain's normalisation over its iterations times n_u p_u / (n_v p_v + n_c p_c). Any
+//! Markov-chain MIS (the paper's section 4), the balance heuristic over three sets of
+//! samples: the bootstrap's n_u uniform ones (density 1: they are vcm's light subpaths, and
+//! where the chains gain nothing they keep vcm's estimate), and the chains' planned
+//! iterations n_v and n_c with p_v = V / b~_v and p_c = C / b~_c. Each sample is weighted by
+//! its set's normalisation over its count times n_j p_j / (n_u + n_v p_v + n_c p_c). Any
 //! weights that add up to one keep the estimate unbiased, so b~_v and b~_c are the means of
 //! b_v and b_B over earlier passes (independent of this pass's samples); this pass's own
 //! come in only as each chain's normalisation. The sum over a worker's states, times its
@@ -37,9 +39,7 @@
 
 use super::Pass;
 use super::metropolis::{CameraVertices, ChainGather, Contribution, Proposer};
-use crate::integrators::visibility_chain::{
-    ChainCounters, ChainHistory, INITIAL_MUTATION_SIZE, TARGET_ACCEPTANCE,
-};
+use crate::integrators::visibility_chain::{ChainCounters, ChainHistory, INITIAL_MUTATION_SIZE};
 use crate::integrators::{Cancelled, PassStats, PlotSeries};
 use crate::sampling::pss::PssSampler;
 use rayon::prelude::*;
@@ -81,6 +81,8 @@ impl ChainState {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Chain {
+    /// A bootstrap sample: uniform.
+    Uniform,
     Visibility,
     Contribution,
 }
@@ -106,17 +108,24 @@ struct Records {
 impl Records {
     /// Records what `state` held since it was last recorded.
     fn record(&mut self, state: &mut ChainState, chain: Chain) {
-        if state.held > 0 && !state.current.is_empty() {
-            self.records.push(Record {
-                start: self.arena.len() as u32,
-                len: state.current.len() as u32,
-                held: state.held,
-                c: state.c,
-                chain,
-            });
-            self.arena.extend_from_slice(&state.current);
+        if state.held > 0 {
+            self.push(&state.current, state.held, state.c, chain);
         }
         state.held = 0;
+    }
+
+    fn push(&mut self, contributions: &[Contribution], held: u32, c: f32, chain: Chain) {
+        if contributions.is_empty() {
+            return;
+        }
+        self.records.push(Record {
+            start: self.arena.len() as u32,
+            len: contributions.len() as u32,
+            held,
+            c,
+            chain,
+        });
+        self.arena.extend_from_slice(contributions);
     }
 
     fn clear(&mut self) {
@@ -141,6 +150,7 @@ fn total_c(contributions: &[Contribution], merge_normalization: f32) -> f32 {
 /// the earlier passes' normalisations (module docs).
 #[derive(Clone, Copy, Debug)]
 struct Balance {
+    n_u: f64,
     n_v: f64,
     n_c: f64,
     b_v: f64,
@@ -148,9 +158,9 @@ struct Balance {
 }
 
 impl Balance {
-    /// n_v p_v + n_c p_c at a visible state of contribution `c`.
+    /// n_u + n_v p_v + n_c p_c at a visible state of contribution `c`.
     fn density(&self, c: f32) -> f64 {
-        self.n_v / self.b_v + self.n_c * f64::from(c) / self.b_c
+        self.n_u + self.n_v / self.b_v + self.n_c * f64::from(c) / self.b_c
     }
 }
 
@@ -161,12 +171,10 @@ struct ChainPair {
     contribution: ChainState,
     proposer: Proposer,
     proposal: Vec<Contribution>,
-    /// The visibility chain's counters (amcvcm's).
+    /// Each chain's counters: the visibility chain's are amcvcm's; the contribution chain's
+    /// count its uniform proposals that brought anything, its steps and its mutation size.
     counters: ChainCounters,
-    /// The contribution chain's mutation size, mutations and accepted ones (over the run).
-    contribution_size: f32,
-    contribution_mutations: u64,
-    contribution_accepted: u64,
+    contribution_counters: ChainCounters,
     /// This pass: the bootstrap's samples and sum of C, the iterations the visibility chain
     /// held a state, each chain's planned iterations, the states held.
     bootstrap: u64,
@@ -184,9 +192,7 @@ impl ChainPair {
             proposer: Proposer::new(seed ^ CHAIN_STREAM, index),
             proposal: Vec::new(),
             counters: ChainCounters::default(),
-            contribution_size: INITIAL_MUTATION_SIZE,
-            contribution_mutations: 0,
-            contribution_accepted: 0,
+            contribution_counters: ChainCounters::default(),
             bootstrap: 0,
             bootstrap_c: 0.0,
             held_visibility: 0,
@@ -217,6 +223,7 @@ impl ChainPair {
     ) -> Result<PassStats, Cancelled> {
         let mut st = PassStats::default();
         self.counters.start_pass();
+        self.contribution_counters.start_pass();
         for s in [&mut self.visibility, &mut self.contribution] {
             s.current.clear();
             s.held = 0;
@@ -232,14 +239,13 @@ impl ChainPair {
             }
             if j < bootstrap {
                 self.bootstrap_step(setup, cameras, &mut st);
-            } else if (j - bootstrap) % 2 == 0 {
+            } else if (j - bootstrap).is_multiple_of(2) {
                 self.visibility_step(setup, cameras, large_step_prob, &mut st);
             } else {
                 self.contribution_step(setup, cameras, large_step_prob, &mut st);
             }
         }
-        self.records
-            .record(&mut self.visibility, Chain::Visibility);
+        self.records.record(&mut self.visibility, Chain::Visibility);
         self.records
             .record(&mut self.contribution, Chain::Contribution);
         Ok(st)
@@ -255,9 +261,11 @@ impl ChainPair {
         self.proposer
             .propose(setup, cameras, &mut s.pss, &mut self.proposal, st);
         let c = total_c(&self.proposal, setup.merge_normalization);
-        self.counters.record(false, true, !self.proposal.is_empty());
+        self.counters.uniform += 1;
+        self.counters.uniform_visible += u64::from(!self.proposal.is_empty());
         self.bootstrap += 1;
         self.bootstrap_c += f64::from(c);
+        self.records.push(&self.proposal, 1, c, Chain::Uniform);
         if c > 0.0 && f64::from(self.proposer.uniform()) * self.bootstrap_c < f64::from(c) {
             s.pss.accept();
             std::mem::swap(&mut s.current, &mut self.proposal);
@@ -285,7 +293,7 @@ impl ChainPair {
         self.counters
             .record(searching, s.pss.is_large_step(), visible);
         let c = total_c(&self.proposal, setup.merge_normalization);
-        if visible && c > 0.0 {
+        if visible {
             s.take(&mut self.proposal, c, &mut self.records, Chain::Visibility);
         } else {
             s.pss.reject();
@@ -312,26 +320,30 @@ impl ChainPair {
             // Nothing in the bootstrap brought anything: b_B = 0 weighs this chain out.
             return;
         }
-        s.pss.large_step_prob = large_step_prob;
-        s.pss.sigma = self.contribution_size;
-        s.pss.start_iteration();
+        let counters = &mut self.contribution_counters;
+        counters.start_step(&mut s.pss, false, large_step_prob);
         self.proposer
             .propose(setup, cameras, &mut s.pss, &mut self.proposal, st);
         let c = total_c(&self.proposal, setup.merge_normalization);
         let accept = c > 0.0 && self.proposer.uniform() < c / s.c;
-        if !s.pss.is_large_step() {
-            self.contribution_mutations += 1;
-            self.contribution_accepted += u64::from(accept);
-            let step = (f64::from(u8::from(accept)) - TARGET_ACCEPTANCE)
-                / self.contribution_mutations as f64;
-            self.contribution_size = (self.contribution_size + step as f32).clamp(1e-5, 0.5);
+        if s.pss.is_large_step() {
+            counters.uniform += 1;
+            counters.uniform_visible += u64::from(!self.proposal.is_empty());
+        } else {
+            counters.count_mutation(accept);
         }
         if accept {
-            s.take(&mut self.proposal, c, &mut self.records, Chain::Contribution);
+            s.take(
+                &mut self.proposal,
+                c,
+                &mut self.records,
+                Chain::Contribution,
+            );
         } else {
             s.pss.reject();
         }
         s.held += 1;
+        counters.chain_samples += 1;
     }
 
     /// This pass's states weighted by the balance heuristic over both chains (module docs),
@@ -357,18 +369,19 @@ impl ChainPair {
             if !(density > 0.0) {
                 continue;
             }
-            // Visibility: b_v / (iterations held) x n_v p_v / density, with V = 1;
-            // contribution: b_B / n_c x n_c p_c / (C density), p_c = C / b~_c.
+            // Uniform: 1 / n_u x n_u / density; visibility: b_v / (iterations held) x
+            // n_v p_v / density, with V = 1; contribution: b_B / n_c x n_c p_c / (C density),
+            // p_c = C / b~_c.
             let weight = match r.chain {
                 Chain::Visibility if self.held_visibility > 0 => {
                     b_v / self.held_visibility as f64 * balance.n_v / balance.b_v / density
                 }
                 Chain::Visibility => 0.0,
+                Chain::Uniform => 1.0 / density,
                 Chain::Contribution => b_b / balance.b_c / density,
             };
             let weight = n * f64::from(r.held) * weight;
-            let contributions =
-                &self.records.arena[r.start as usize..(r.start + r.len) as usize];
+            let contributions = &self.records.arena[r.start as usize..(r.start + r.len) as usize];
             gather.add(contributions, weight as f32, merge_normalization);
         }
         gather
@@ -382,6 +395,7 @@ pub struct MetropolisedLightSubpaths {
     pub large_step_prob: f32,
     pairs: Vec<ChainPair>,
     history: ChainHistory,
+    contribution_history: ChainHistory,
     /// Earlier passes: their count and the sums of their b_v and b_B (the MIS weights').
     passes: u64,
     b_v_sum: f64,
@@ -397,7 +411,9 @@ impl MetropolisedLightSubpaths {
     }
 
     pub fn memory_bytes(&self) -> usize {
-        self.pairs.iter().map(|p| p.memory_bytes()).sum::<usize>() + self.history.memory_bytes()
+        self.pairs.iter().map(|p| p.memory_bytes()).sum::<usize>()
+            + self.history.memory_bytes()
+            + self.contribution_history.memory_bytes()
     }
 
     /// The light half of a pass: `light_paths` iterations shared among the workers' pairs
@@ -419,6 +435,8 @@ impl MetropolisedLightSubpaths {
         }
         self.history
             .start_pass(self.pairs.iter().map(|p| &p.counters));
+        self.contribution_history
+            .start_pass(self.pairs.iter().map(|p| &p.contribution_counters));
         let count = self.pairs.len() as u64;
         let share = |i: usize| light_paths / count + u64::from((i as u64) < light_paths % count);
         let large_step_prob = self.large_step_prob;
@@ -433,9 +451,12 @@ impl MetropolisedLightSubpaths {
             .visible_fraction(self.pairs.iter().map(|p| &p.counters));
         self.history
             .end_pass(self.pairs.iter().map(|p| &p.counters));
-        let (bootstrap, bootstrap_c) = self.pairs.iter().fold((0, 0.0), |(n, c), p| {
-            (n + p.bootstrap, c + p.bootstrap_c)
-        });
+        self.contribution_history
+            .end_pass(self.pairs.iter().map(|p| &p.contribution_counters));
+        let (bootstrap, bootstrap_c) = self
+            .pairs
+            .iter()
+            .fold((0, 0.0), |(n, c), p| (n + p.bootstrap, c + p.bootstrap_c));
         let b_c = if bootstrap == 0 {
             0.0
         } else {
@@ -466,6 +487,7 @@ impl MetropolisedLightSubpaths {
             .map(|(i, pair)| {
                 let (n_v, n_c) = pair.planned;
                 let balance = Balance {
+                    n_u: pair.bootstrap as f64,
                     n_v: n_v as f64,
                     n_c: n_c as f64,
                     b_v: b_v_w,
@@ -480,26 +502,35 @@ impl MetropolisedLightSubpaths {
         Ok(total)
     }
 
-    /// The run's counters for `--stats`: the visibility chains' (amcvcm's) and the
-    /// contribution chains' acceptance and mutation sizes.
+    /// The run's counters for `--stats`: the visibility chains' (amcvcm's), and the
+    /// contribution chains' under `contribution_chain` with the mean C of the bootstraps.
     pub fn statistics(&self) -> serde_json::Value {
         let mut s = self
             .history
             .statistics(self.pairs.iter().map(|p| &p.counters));
-        let (m, a) = self.pairs.iter().fold((0, 0), |(m, a), p| {
-            (m + p.contribution_mutations, a + p.contribution_accepted)
-        });
-        s["contribution_chain"] = serde_json::json!({
-            "mutations": m,
-            "accepted": a,
-            "acceptance": if m == 0 { 0.0 } else { a as f64 / m as f64 },
-            "mutation_sizes": self.pairs.iter().map(|p| p.contribution_size).collect::<Vec<_>>(),
-            "mean_bootstrap_contribution": if self.passes == 0 { 0.0 } else { self.b_c_sum / self.passes as f64 },
-        });
+        let mut c = self
+            .contribution_history
+            .statistics(self.pairs.iter().map(|p| &p.contribution_counters));
+        c["mean_bootstrap_contribution"] = if self.passes == 0 {
+            0.0
+        } else {
+            self.b_c_sum / self.passes as f64
+        }
+        .into();
+        s["contribution_chain"] = c;
         s
     }
 
+    /// amcvcm's plots of the visibility chains, and the contribution chains' acceptance and
+    /// mutation size beside them.
     pub fn plots(&self) -> Vec<PlotSeries> {
-        self.history.plots("light subpaths")
+        let mut plots = self.history.plots("light subpaths");
+        for mut p in self.contribution_history.plots("light subpaths") {
+            if p.plot == "Chains" && p.name != "replica exchanges" {
+                p.name = format!("{} (contribution chain)", p.name);
+                plots.push(p);
+            }
+        }
+        plots
     }
 }

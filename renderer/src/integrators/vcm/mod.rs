@@ -117,11 +117,10 @@ pub fn create_amcvcm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator>
 /// their MIS (`metropolised.rs`).
 pub fn create_mvcm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
     let large_step_prob = params::param_value(VcmSettings::METROPOLIS_PARAMS, p, "large_step");
-    let chains =
-        ChainedLightSubpaths::Metropolised(MetropolisedLightSubpaths::new(large_step_prob as f32));
-    let mut vcm = Vcm::new(ctx, VcmSettings::from_params(p));
-    vcm.metropolis = Some(chains);
-    Box::new(vcm)
+    Box::new(
+        Vcm::new(ctx, VcmSettings::from_params(p))
+            .with_metropolised_light_subpaths(large_step_prob as f32),
+    )
 }
 
 /// Where a pass's light subpaths come from when not independent.
@@ -264,6 +263,14 @@ impl Vcm {
     pub fn with_metropolis_light_subpaths(mut self, large_step_prob: f32) -> Self {
         self.metropolis = Some(ChainedLightSubpaths::Visibility(
             MetropolisLightSubpaths::new(large_step_prob),
+        ));
+        self
+    }
+
+    /// mvcm: light subpaths from visibility and contribution chains (`metropolised.rs`).
+    pub fn with_metropolised_light_subpaths(mut self, large_step_prob: f32) -> Self {
+        self.metropolis = Some(ChainedLightSubpaths::Metropolised(
+            MetropolisedLightSubpaths::new(large_step_prob),
         ));
         self
     }
