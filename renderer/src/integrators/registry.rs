@@ -104,7 +104,7 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Šik et al. 2016: vcm whose light subpaths come from a visibility chain and a contribution chain, combined by their MIS.",
         params: vcm::VcmSettings::METROPOLIS_PARAMS,
         create: vcm::create_mvcm,
-        bytes_per_pixel: 1200,
+        bytes_per_pixel: 1600,
     },
 ];
 
