@@ -36,6 +36,20 @@ pub const fn large_step_param(doc: &'static str) -> ParamSpec {
     ParamSpec::new("large_step", doc, 0.3, (0.01, 1.0)).live()
 }
 
+/// A chain (or whatever a worker runs) for each of this pass's workers, made anew when their
+/// number changed.
+pub fn one_per_worker<T>(chains: &mut Vec<T>, new: impl Fn(u64) -> T) {
+    let workers = rayon::current_num_threads().max(1);
+    if chains.len() != workers {
+        *chains = (0..workers as u64).map(new).collect();
+    }
+}
+
+/// Worker `i`'s share of `total` iterations split among `workers`.
+pub fn worker_share(total: u64, workers: u64, i: u64) -> u64 {
+    total / workers + u64::from(i < total % workers)
+}
+
 /// One chain's counters and mutation size.
 #[derive(Clone, Debug)]
 pub struct ChainCounters {

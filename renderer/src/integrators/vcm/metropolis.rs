@@ -27,7 +27,9 @@ use super::techniques::TechniqueShares;
 use crate::film::sanitize;
 use crate::integrators::bdpt::vertex::Vertex;
 use crate::integrators::ppm::hash_grid::HashGrid;
-use crate::integrators::visibility_chain::{ChainCounters, ChainHistory, large_step_param};
+use crate::integrators::visibility_chain::{
+    ChainCounters, ChainHistory, large_step_param, one_per_worker, worker_share,
+};
 use crate::integrators::{Cancelled, ParamSpec, PassStats, PlotSeries};
 use crate::sampling::pss::{LIGHT_STREAM, PssSampler};
 use crate::sampling::sampler::Sampler;
@@ -474,12 +476,7 @@ impl MetropolisLightSubpaths {
         cancel: &AtomicBool,
         stats: &mut PassStats,
     ) -> Result<ChainGather, Cancelled> {
-        let workers = rayon::current_num_threads().max(1);
-        if self.chains.len() != workers {
-            self.chains = (0..workers as u64)
-                .map(|i| LightSubpathChain::new(seed, i))
-                .collect();
-        }
+        one_per_worker(&mut self.chains, |i| LightSubpathChain::new(seed, i));
         self.history
             .start_pass(self.chains.iter().map(|c| &c.counters));
         let pixels = cameras.ends.len();
@@ -491,7 +488,7 @@ impl MetropolisLightSubpaths {
             .enumerate()
             .map(|(i, chain)| {
                 let i = i as u64;
-                let iterations = light_paths / count + u64::from(i < light_paths % count);
+                let iterations = worker_share(light_paths, count, i);
                 let mut gather = ChainGather::new(pixels);
                 let mut st = PassStats::default();
                 chain.current.clear();

@@ -39,7 +39,9 @@
 
 use super::Pass;
 use super::metropolis::{CameraVertices, ChainGather, Contribution, Proposer};
-use crate::integrators::visibility_chain::{ChainCounters, ChainHistory, INITIAL_MUTATION_SIZE};
+use crate::integrators::visibility_chain::{
+    ChainCounters, ChainHistory, INITIAL_MUTATION_SIZE, one_per_worker, worker_share,
+};
 use crate::integrators::{Cancelled, PassStats, PlotSeries};
 use crate::sampling::pss::PssSampler;
 use rayon::prelude::*;
@@ -427,18 +429,13 @@ impl MetropolisedLightSubpaths {
         cancel: &AtomicBool,
         stats: &mut PassStats,
     ) -> Result<ChainGather, Cancelled> {
-        let workers = rayon::current_num_threads().max(1);
-        if self.pairs.len() != workers {
-            self.pairs = (0..workers as u64)
-                .map(|i| ChainPair::new(seed, i))
-                .collect();
-        }
+        one_per_worker(&mut self.pairs, |i| ChainPair::new(seed, i));
         self.history
             .start_pass(self.pairs.iter().map(|p| &p.counters));
         self.contribution_history
             .start_pass(self.pairs.iter().map(|p| &p.contribution_counters));
         let count = self.pairs.len() as u64;
-        let share = |i: usize| light_paths / count + u64::from((i as u64) < light_paths % count);
+        let share = |i: usize| worker_share(light_paths, count, i as u64);
         let large_step_prob = self.large_step_prob;
         let results: Vec<PassStats> = self
             .pairs
