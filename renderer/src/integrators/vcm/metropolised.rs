@@ -177,11 +177,11 @@ struct ChainPair {
     /// count its uniform proposals that brought anything, its steps and its mutation size.
     counters: ChainCounters,
     contribution_counters: ChainCounters,
-    /// This pass: the bootstrap's samples and sum of C, the iterations the visibility chain
-    /// held a state, each chain's planned iterations, the states held.
+    /// This pass: the bootstrap's samples and sum of C, each chain's planned iterations, the
+    /// states held (the iterations the visibility chain held a state are its
+    /// `chain_samples`).
     bootstrap: u64,
     bootstrap_c: f64,
-    held_visibility: u64,
     planned: (u64, u64),
     records: Records,
 }
@@ -197,7 +197,6 @@ impl ChainPair {
             contribution_counters: ChainCounters::default(),
             bootstrap: 0,
             bootstrap_c: 0.0,
-            held_visibility: 0,
             planned: (0, 0),
             records: Records::default(),
         }
@@ -230,7 +229,7 @@ impl ChainPair {
             s.current.clear();
             s.held = 0;
         }
-        (self.bootstrap, self.bootstrap_c, self.held_visibility) = (0, 0.0, 0);
+        (self.bootstrap, self.bootstrap_c) = (0, 0.0);
         self.records.clear();
         let bootstrap = iterations.div_ceil(BOOTSTRAP_SHARE);
         let rest = iterations - bootstrap;
@@ -302,7 +301,6 @@ impl ChainPair {
         }
         if !s.current.is_empty() {
             s.held += 1;
-            self.held_visibility += 1;
             self.counters.chain_samples += 1;
         }
     }
@@ -375,8 +373,9 @@ impl ChainPair {
             // n_v p_v / density, with V = 1; contribution: b_B / n_c x n_c p_c / (C density),
             // p_c = C / b~_c.
             let weight = match r.chain {
-                Chain::Visibility if self.held_visibility > 0 => {
-                    b_v / self.held_visibility as f64 * balance.n_v / balance.b_v / density
+                Chain::Visibility if self.counters.chain_samples > 0 => {
+                    let held = self.counters.chain_samples as f64;
+                    b_v / held * balance.n_v / balance.b_v / density
                 }
                 Chain::Visibility => 0.0,
                 Chain::Uniform => 1.0 / density,
