@@ -60,6 +60,11 @@ pub fn run(args: &InfoArgs) -> Result<(), crate::render::Failure> {
         pct(s.caustic_flux),
         pct(s.delta_caustic_flux).trim()
     );
+    println!(
+        "  {} of the light reaching the surfaces the camera sees (directly or through specular ones) is caustic; they get {} of the light",
+        pct(s.seen_caustic_flux),
+        pct(s.seen_flux).trim()
+    );
     for (name, why) in &r.cannot_converge {
         println!("cannot converge: {name}: {why}");
     }

@@ -5,7 +5,10 @@
 //! - how much of the view is seen through specular surfaces (paths E S+ D: glass, mirrors),
 //! - how much of the light reaching diffuse or glossy surfaces has passed specular ones first
 //!   (L S+ D: caustics), and how much of that comes from delta lights (point, spot,
-//!   directional),
+//!   directional); and the same share of the light reaching the surfaces the camera sees
+//!   (directly or through specular chains), which is what decides: a caustic in a closed
+//!   closet matters as little as any light there, a caustic under the glass the camera looks
+//!   through is the image,
 //! - how much of what the camera sees has a light in direct view (the rest is lit through
 //!   openings or by interreflection only), and how much of it is glossy,
 //! - how far away the camera sees surfaces, through specular chains.
@@ -17,7 +20,8 @@ use crate::light::emission::emit_photon;
 use crate::material::{Bsdf, TransportMode};
 use crate::sampling::sampler::Sampler;
 use crate::scene::Scene;
-use glam::Vec2;
+use glam::{IVec3, Vec2, Vec3};
+use std::collections::HashSet;
 
 /// Bounces followed through specular surfaces before a path is given up.
 const MAX_SPECULAR_DEPTH: u32 = 16;
@@ -45,6 +49,13 @@ pub struct TransportSurvey {
     pub caustic_flux: f64,
     /// The part of `caustic_flux` that comes from delta lights.
     pub delta_caustic_flux: f64,
+    /// `caustic_flux` of the light that lands where the camera sees (within about two spacings
+    /// of the camera paths' first non-specular vertices): the share of the seen surfaces'
+    /// first-bounce light that is caustic.
+    pub seen_caustic_flux: f64,
+    /// Of the flux photons bring to their first non-specular surface, the share that lands
+    /// where the camera sees.
+    pub seen_flux: f64,
     /// Median length of the camera paths to their first non-specular vertex (scene units).
     pub median_hit_distance: f64,
 }
@@ -70,7 +81,7 @@ pub fn survey(
         light_paths,
         ..Default::default()
     };
-    let view = survey_view(scene, camera, camera_paths, seed);
+    let (view, seen) = view_and_seen_cells(scene, camera, camera_paths, seed);
     s.seen_through_specular = view.seen_through_specular;
     s.glossy = view.glossy;
     s.directly_lit = view.directly_lit;
@@ -92,6 +103,7 @@ pub fn survey(
         0.0
     };
     let (mut flux_all, mut flux_caustic, mut flux_delta_caustic) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut flux_seen, mut flux_seen_caustic) = (0.0f64, 0.0f64);
     for i in 0..light_paths {
         sampler.start_pixel_sample(i as u64, 1);
         let Some((light, mut ray, mut flux)) = emit_photon(scene, &mut sampler) else {
@@ -106,8 +118,15 @@ pub fn survey(
                 let power = crate::geometry::luminance(flux) as f64;
                 if power.is_finite() {
                     flux_all += power;
+                    let is_seen = seen.contains(si.p, facing(si.n, -ray.d));
+                    if is_seen {
+                        flux_seen += power;
+                    }
                     if depth > 0 {
                         flux_caustic += power;
+                        if is_seen {
+                            flux_seen_caustic += power;
+                        }
                         if scene.lights[light].is_delta() {
                             flux_delta_caustic += power;
                         }
@@ -127,14 +146,105 @@ pub fn survey(
     if flux_all > 0.0 {
         s.caustic_flux = flux_caustic / flux_all;
         s.delta_caustic_flux = flux_delta_caustic / flux_all;
+        s.seen_flux = flux_seen / flux_all;
+    }
+    if flux_seen > 0.0 {
+        s.seen_caustic_flux = flux_seen_caustic / flux_seen;
     }
     s
+}
+
+/// Cells of a grid around the camera paths' first non-specular vertices: a point is seen if
+/// its cell is one of them on the same side of the surface. The cell is twice the vertices'
+/// spacing on a surface facing the camera at their median distance (the paths are fewer than
+/// the pixels), and each vertex marks its cell and the 26 around it, so a point within about
+/// two spacings of one counts. The side (the axis and sign nearest the normal facing where
+/// the path came from) keeps the far face of a thin wall apart: without it the closet behind
+/// the gap-and-glass scene's partition counted as seen, and with it half the light.
+pub struct SeenCells {
+    cell: f32,
+    cells: HashSet<(IVec3, u8)>,
+}
+
+/// The axis and sign nearest `n` (0..6).
+fn side(n: Vec3) -> u8 {
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    2 * axis + u8::from(n[axis as usize] < 0.0)
+}
+
+/// The geometric normal on the side `towards` points to.
+fn facing(n: Vec3, towards: Vec3) -> Vec3 {
+    if n.dot(towards) < 0.0 { -n } else { n }
+}
+
+impl SeenCells {
+    fn new(points: &[(Vec3, Vec3)], spacing: f64) -> Self {
+        let cell = (2.0 * spacing) as f32;
+        let mut cells = HashSet::new();
+        if cell > 0.0 && cell.is_finite() {
+            for (p, n) in points {
+                let c = (*p / cell).floor().as_ivec3();
+                for dz in -1..=1 {
+                    for dy in -1..=1 {
+                        for dx in -1..=1 {
+                            cells.insert((c + IVec3::new(dx, dy, dz), side(*n)));
+                        }
+                    }
+                }
+            }
+        }
+        Self { cell, cells }
+    }
+
+    /// Whether the point `p` on a surface whose normal on the side it is seen or lit from is
+    /// `n` is near a camera path's vertex on the same side.
+    pub fn contains(&self, p: Vec3, n: Vec3) -> bool {
+        !self.cells.is_empty()
+            && self
+                .cells
+                .contains(&((p / self.cell).floor().as_ivec3(), side(n)))
+    }
+}
+
+/// The camera half of the survey and the cells it sees.
+fn view_and_seen_cells(
+    scene: &Scene,
+    camera: &Camera,
+    paths: usize,
+    seed: u64,
+) -> (TransportSurvey, SeenCells) {
+    let mut points = Vec::new();
+    let view = camera_half(scene, camera, paths, seed, Some(&mut points));
+    let pixels = camera.width as f64 * camera.height as f64;
+    let spacing = camera
+        .desc()
+        .pixel_size(view.median_hit_distance, camera.height)
+        * (pixels / paths.max(1) as f64).sqrt();
+    (view, SeenCells::new(&points, spacing))
 }
 
 /// The camera half of the survey: `paths` camera paths on a jittered grid over the image,
 /// followed through specular bounces to their first non-specular vertex (or given up after
 /// `MAX_SPECULAR_DEPTH`); fills the view's shares and the median hit distance.
 pub fn survey_view(scene: &Scene, camera: &Camera, paths: usize, seed: u64) -> TransportSurvey {
+    camera_half(scene, camera, paths, seed, None)
+}
+
+/// `survey_view`, which also collects the first non-specular vertices in `points`.
+fn camera_half(
+    scene: &Scene,
+    camera: &Camera,
+    paths: usize,
+    seed: u64,
+    mut points: Option<&mut Vec<(Vec3, Vec3)>>,
+) -> TransportSurvey {
     let mut s = TransportSurvey {
         camera_paths: paths,
         ..Default::default()
@@ -165,6 +275,9 @@ pub fn survey_view(scene: &Scene, camera: &Camera, paths: usize, seed: u64) -> T
                 through += usize::from(depth > 0);
                 glossy += usize::from(is_glossy(&bsdf));
                 distances.push(length as f64);
+                if let Some(points) = points.as_deref_mut() {
+                    points.push((si.p, facing(si.n, -ray.d)));
+                }
                 let seen = (0..4).any(|_| {
                     sample_direct(scene, &si, &bsdf, wo, &mut sampler, &mut rays, false)
                         .max_element()

@@ -90,6 +90,7 @@ fn info_recommends_and_reference_renders_with_the_recommendation() {
         ("assets/cornell-box.gltf", "pt", "pt"),
         ("assets/caustic-pool.gltf", "sppm", "sppm"),
         ("assets/door.gltf", "mmlt", "bdpt"),
+        ("assets/gap-glass.gltf", "amcppm", "bdpt"),
     ] {
         let o = run(&format!("info {scene} --width 64"));
         assert!(o.status.success(), "{}", stderr(&o));
