@@ -278,9 +278,12 @@ fn on_cornell_glass_every_estimate_tracks_the_true_error() {
     let (reference, reference_error) = reference_by(&scene, "pt", &[], (40, 40), 4096);
     eprintln!("cornell-glass reference: estimated relMSE {reference_error:.2e}");
     let photons = [("photons", 20_000.0)];
-    let runs: [Run; 7] = [
+    let runs: [Run; 10] = [
         ("pt", &[], &[4, 16, 64, 256]),
         ("vcm", &[], &[4, 16, 32]),
+        ("amcvcm", &[], &[4, 16, 32]),
+        ("mvcm", &[], &[4, 16, 32]),
+        ("amcppm", &photons, &[8, 16, 64]),
         ("bdpt", &[], &[4, 16, 64]),
         ("mmlt", &[("bootstrap", 10_000.0)], &[4, 16, 64]),
         ("sppm", &photons, &[8, 16, 64]),
@@ -301,9 +304,12 @@ fn on_the_door_every_estimate_tracks_the_true_error() {
     let (reference, reference_error) = reference_by(&scene, "bdpt", &depth, (32, 32), 2048);
     eprintln!("door reference: estimated relMSE {reference_error:.2e}");
     let photons = [("max_depth", 10.0), ("photons", 20_000.0)];
-    let runs: [Run; 7] = [
+    let runs: [Run; 10] = [
         ("pt", &depth, &[16, 64, 256]),
         ("vcm", &depth, &[16, 64]),
+        ("amcvcm", &depth, &[16, 64]),
+        ("mvcm", &depth, &[16, 64]),
+        ("amcppm", &photons, &[16, 64]),
         ("bdpt", &depth, &[4, 16, 64]),
         (
             "mmlt",
@@ -325,9 +331,12 @@ fn on_the_caustic_pool_every_estimate_tracks_the_true_error() {
     let (reference, reference_error) = shipped_reference("caustic-pool");
     eprintln!("caustic-pool reference: estimated relMSE {reference_error:.2e}");
     let photons = [("photons", 20_000.0)];
-    let runs: [Run; 7] = [
+    let runs: [Run; 10] = [
         ("pt", &[], &[16, 64, 256]),
         ("vcm", &[], &[8, 16, 64]),
+        ("amcvcm", &[], &[8, 16, 64]),
+        ("mvcm", &[], &[8, 16, 64]),
+        ("amcppm", &photons, &[8, 16, 64]),
         ("bdpt", &[], &[4, 16, 64]),
         ("mmlt", &[("bootstrap", 30_000.0)], &[16, 64]),
         ("sppm", &photons, &[8, 16, 64]),

@@ -92,11 +92,14 @@ fn significant_bias(bias: DVec3, variance: DVec3, x: DVec3, passes: u64) -> (DVe
 }
 
 /// Each pixel's variance, squared bias and robust r^2 for `image`, the mean of `passes`
-/// passes whose sums `sums(i)` gives for pixel i (at least two passes).
+/// passes whose sums `sums(i)` gives for pixel i (at least two passes). `independent`, where
+/// the integrator has one, is an unbiased image whose noise does not follow the passes'
+/// (`error_estimate::robust_reference_sq`).
 pub fn pixel_errors<'a>(
     image: &Image,
     passes: u64,
     sums: impl Fn(usize) -> &'a PassSums + Sync,
+    independent: Option<&[DVec3]>,
 ) -> Vec<PixelError> {
     let n = passes;
     let (w, h) = (image.width, image.height);
@@ -110,7 +113,7 @@ pub fn pixel_errors<'a>(
         .into_par_iter()
         .map(|i| (sums(i).estimate_sum - sums(i).odd_estimate_sum) / n_even)
         .collect();
-    let robust = error_estimate::robust_reference_sq(&[odd, even], None, w, h);
+    let robust = error_estimate::robust_reference_sq(&[odd, even], independent, w, h);
     // The kernel bias lifts x on the dark side of every edge, just where the squared bias
     // is largest relative to r^2: r is taken below x by the bias estimate there, the
     // pixel's own where it stands out of its noise, else the neighbourhood's mean (the

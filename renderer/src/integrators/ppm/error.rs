@@ -40,7 +40,8 @@ impl PhotonMapper {
             return None;
         }
         let image = self.image();
-        let mut pixels = kernel_bias::pixel_errors(&image, self.passes, |i| &self.pixels[i].passes);
+        let mut pixels =
+            kernel_bias::pixel_errors(&image, self.passes, |i| &self.pixels[i].passes, None);
         if self.variant.fixed_hit_points() {
             self.add_footprint_variance(&mut pixels);
         }

@@ -159,13 +159,17 @@ pub(super) struct Contribution {
 }
 
 impl Contribution {
-    /// Its luminance in the image (a merge's with its normalisation).
-    pub(super) fn luminance(&self, merge_normalization: f32) -> f32 {
-        let l = crate::geometry::luminance(self.value);
+    /// Its value in the image (a merge's with its normalisation).
+    pub(super) fn image_value(&self, merge_normalization: f32) -> Vec3 {
         match self.technique {
-            Technique::Connection { .. } => l,
-            Technique::Merge { .. } => l * merge_normalization,
+            Technique::Connection { .. } => self.value,
+            Technique::Merge { .. } => self.value * merge_normalization,
         }
+    }
+
+    /// Its luminance in the image.
+    pub(super) fn luminance(&self, merge_normalization: f32) -> f32 {
+        crate::geometry::luminance(self.image_value(merge_normalization))
     }
 }
 
@@ -188,6 +192,10 @@ pub(super) struct ChainGather {
     pub merged: Vec<Vec3>,
     pub merged_inner: Vec<Vec3>,
     pub shares: TechniqueShares,
+    /// Where the light subpaths include uniform ones (mvcm's bootstrap), what they alone
+    /// bring, weighted to stand for all of them: an unbiased image whose noise does not
+    /// follow the chains' (for the error estimate's r); empty otherwise.
+    pub independent: Vec<Vec3>,
 }
 
 impl ChainGather {
@@ -197,6 +205,7 @@ impl ChainGather {
             merged: vec![Vec3::ZERO; pixels],
             merged_inner: vec![Vec3::ZERO; pixels],
             shares: TechniqueShares::default(),
+            independent: Vec::new(),
         }
     }
 
@@ -242,6 +251,12 @@ impl ChainGather {
         for (t, v) in self.merged_inner.iter_mut().zip(&g.merged_inner) {
             *t += *v;
         }
+        if self.independent.is_empty() {
+            self.independent = vec![Vec3::ZERO; g.independent.len()];
+        }
+        for (t, v) in self.independent.iter_mut().zip(&g.independent) {
+            *t += *v;
+        }
         self.shares.add(&g.shares);
     }
 
@@ -251,6 +266,7 @@ impl ChainGather {
             .iter_mut()
             .chain(&mut self.merged)
             .chain(&mut self.merged_inner)
+            .chain(&mut self.independent)
         {
             *v *= s;
         }

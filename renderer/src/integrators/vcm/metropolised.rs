@@ -36,6 +36,10 @@
 //! iterations, estimates what its share of N_L independent light subpaths would bring.
 //! No replica exchange: it would couple the visibility chain to the contribution chain's
 //! weighted start, and no weight then keeps the visibility chain's half unbiased.
+//!
+//! The error estimate's r comes partly from an independent image (DESIGN.md 5d): the same
+//! states weighted without the contribution chain, whose concentration of a pass's
+//! iterations in a pixel or two the robust r otherwise takes for fireflies.
 
 use super::Pass;
 use super::metropolis::{CameraVertices, ChainGather, Contribution, Proposer};
@@ -346,6 +350,31 @@ impl ChainPair {
         counters.chain_samples += 1;
     }
 
+    /// The bootstrap's uniform samples alone, each standing for iterations / n_u light
+    /// subpaths: vcm's estimate from fewer light subpaths, unbiased, its noise apart from the
+    /// chains'.
+    fn uniform_only(
+        &self,
+        pixels: usize,
+        iterations: u64,
+        merge_normalization: f32,
+    ) -> ChainGather {
+        let mut gather = ChainGather::new(pixels);
+        let weight = iterations as f64 / self.bootstrap.max(1) as f64;
+        for r in &self.records.records {
+            if r.chain == Chain::Uniform {
+                let contributions =
+                    &self.records.arena[r.start as usize..(r.start + r.len) as usize];
+                gather.add(
+                    contributions,
+                    (weight * f64::from(r.held)) as f32,
+                    merge_normalization,
+                );
+            }
+        }
+        gather
+    }
+
     /// This pass's states weighted by the balance heuristic over both chains (module docs),
     /// times the worker's `iterations`, into a gather. `b_v` is this pass's visible
     /// fraction.
@@ -379,7 +408,8 @@ impl ChainPair {
                 }
                 Chain::Visibility => 0.0,
                 Chain::Uniform => 1.0 / density,
-                Chain::Contribution => b_b / balance.b_c / density,
+                Chain::Contribution if balance.n_c > 0.0 => b_b / balance.b_c / density,
+                Chain::Contribution => 0.0,
             };
             let weight = n * f64::from(r.held) * weight;
             let contributions = &self.records.arena[r.start as usize..(r.start + r.len) as usize];
@@ -473,7 +503,12 @@ impl MetropolisedLightSubpaths {
             *stats = *stats + st;
         }
         if !(b_v_w > 0.0 && b_c_w > 0.0) {
-            // Nothing was visible before this pass; the weights below need both.
+            // Nothing was visible before this pass; the weights below need both, and the
+            // bootstrap's uniform samples alone estimate the light subpaths' part.
+            for (i, pair) in self.pairs.iter().enumerate() {
+                total.add_gather(&pair.uniform_only(pixels, share(i), setup.merge_normalization));
+            }
+            total.independent = total.value.clone();
             return Ok(total);
         }
         let gathers: Vec<ChainGather> = self
@@ -489,7 +524,19 @@ impl MetropolisedLightSubpaths {
                     b_v: b_v_w,
                     b_c: b_c_w,
                 };
-                pair.gather(pixels, share(i), b_v, balance, setup.merge_normalization)
+                let norm = setup.merge_normalization;
+                let mut gather = pair.gather(pixels, share(i), b_v, balance, norm);
+                // The same samples without the contribution chain (amcvcm's estimate, with
+                // the bootstrap's uniform samples): unbiased, and free of the contribution
+                // chain's concentration (many iterations on one bright state, all in a pixel
+                // or two), which made the robust r of the error estimate a third of the
+                // truth on the door (the estimate 3 times the true relMSE at 16 passes).
+                let without = Balance {
+                    n_c: 0.0,
+                    ..balance
+                };
+                gather.independent = pair.gather(pixels, share(i), b_v, without, norm).value;
+                gather
             })
             .collect();
         for g in &gathers {

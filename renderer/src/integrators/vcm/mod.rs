@@ -32,7 +32,7 @@ use crate::integrators::{
 };
 use crate::scene::Scene;
 use camera_pass::CameraSample;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use light_pass::LightVertex;
 use metropolis::MetropolisLightSubpaths;
 use metropolised::MetropolisedLightSubpaths;
@@ -214,6 +214,12 @@ pub struct Vcm {
     settings: VcmSettings,
     /// Per pixel, the passes' estimates and kernel-bias estimates: the image is their mean.
     sums: Vec<PassSums>,
+    /// Per pixel, the sum over passes of an unbiased estimate whose noise does not follow the
+    /// chains' (the camera half and mvcm's uniform light subpaths alone), for the error
+    /// estimate's r; empty where there is none.
+    independent_sums: Vec<DVec3>,
+    /// The same over odd passes only.
+    independent_odd_sums: Vec<DVec3>,
     pass_buffer: Vec<CameraSample>,
     initial_radius: f64,
     radius_sq: f64,
@@ -232,6 +238,30 @@ pub struct Vcm {
 }
 
 impl Vcm {
+    /// The independent image for the error estimate's r (`independent_sums`): per channel
+    /// the lower of its odd and even passes' 3 x 3 means, so that its own noise does not
+    /// lift r (empty where there is none).
+    fn independent_image(&self, width: usize, height: usize) -> Vec<DVec3> {
+        if self.independent_sums.is_empty() || self.passes < 2 {
+            return Vec::new();
+        }
+        let (n_odd, n_even) = ((self.passes / 2) as f64, self.passes.div_ceil(2) as f64);
+        let odd: Vec<DVec3> = self
+            .independent_odd_sums
+            .iter()
+            .map(|s| *s / n_odd)
+            .collect();
+        let even: Vec<DVec3> = self
+            .independent_sums
+            .iter()
+            .zip(&self.independent_odd_sums)
+            .map(|(s, o)| (*s - *o) / n_even)
+            .collect();
+        let odd = crate::error_estimate::box_filter_3x3(&odd, width, height);
+        let even = crate::error_estimate::box_filter_3x3(&even, width, height);
+        odd.iter().zip(&even).map(|(a, b)| a.min(*b)).collect()
+    }
+
     pub fn new(ctx: RenderContext, settings: VcmSettings) -> Self {
         let (w, h) = (ctx.camera.width as usize, ctx.camera.height as usize);
         let initial_radius = if settings.radius > 0.0 {
@@ -243,6 +273,8 @@ impl Vcm {
         Vcm {
             settings,
             sums: vec![PassSums::default(); w * h],
+            independent_sums: Vec::new(),
+            independent_odd_sums: Vec::new(),
             pass_buffer: vec![CameraSample::default(); w * h],
             initial_radius,
             radius_sq: initial_radius * initial_radius,
@@ -351,6 +383,19 @@ impl Integrator for Vcm {
             )?;
             self.shares.add(&camera_shares);
             self.shares.add(&gather.shares);
+            if !gather.independent.is_empty() {
+                self.independent_sums.resize(pixels, DVec3::ZERO);
+                self.independent_odd_sums.resize(pixels, DVec3::ZERO);
+                for (i, (out, light)) in
+                    self.pass_buffer.iter().zip(&gather.independent).enumerate()
+                {
+                    let v = (out.value + *light).as_dvec3();
+                    self.independent_sums[i] += v;
+                    if pass % 2 == 1 {
+                        self.independent_odd_sums[i] += v;
+                    }
+                }
+            }
             for (i, out) in self.pass_buffer.iter_mut().enumerate() {
                 out.value += gather.value[i];
                 out.merged += gather.merged[i];
@@ -387,6 +432,8 @@ impl Integrator for Vcm {
 
     fn memory_bytes(&self) -> usize {
         std::mem::size_of_val(self.sums.as_slice())
+            + std::mem::size_of_val(self.independent_sums.as_slice())
+            + std::mem::size_of_val(self.independent_odd_sums.as_slice())
             + std::mem::size_of_val(self.pass_buffer.as_slice())
             + std::mem::size_of_val(self.radius_history.as_slice())
             + self.pass_bytes
@@ -418,7 +465,9 @@ impl Integrator for Vcm {
             return None;
         }
         let image = self.image();
-        let pixels = kernel_bias::pixel_errors(&image, self.passes, |i| &self.sums[i]);
+        let independent = self.independent_image(image.width, image.height);
+        let independent = (!independent.is_empty()).then_some(independent.as_slice());
+        let pixels = kernel_bias::pixel_errors(&image, self.passes, |i| &self.sums[i], independent);
         ErrorEstimate::from_pixels(image.width, image.height, &pixels)
     }
 
