@@ -13,7 +13,7 @@
 
 use crate::camera::CameraDesc;
 use crate::integrators::ParamValues;
-use crate::integrators::ppm::pixel_footprint_radius;
+use crate::integrators::ppm::{photons_per_pass, pixel_footprint_radius};
 use crate::scene::Scene;
 use crate::survey::{TransportSurvey, survey_at};
 
@@ -174,12 +174,6 @@ impl TransportSurvey {
         }
         r
     }
-}
-
-/// Photons per pass: one per pixel, so that the photon pass and the eye pass cost about the
-/// same (each is one path per item), within 10^4 and 10^6.
-pub fn photons_per_pass(width: u32, height: u32) -> u64 {
-    (width as u64 * height as u64).clamp(10_000, 1_000_000)
 }
 
 #[cfg(test)]
