@@ -212,7 +212,8 @@ pub fn create_pppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
 
 /// SPPM whose photon paths come from visibility chains (Hachisuka & Jensen 2011).
 pub fn create_amcppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator> {
-    let settings = PhotonMappingSettings::from_params(p);
+    let settings =
+        crate::integrators::params::read_settings(PhotonMappingSettings::METROPOLIS_PARAMS, p);
     let large_step_prob = crate::integrators::params::param_value(
         PhotonMappingSettings::METROPOLIS_PARAMS,
         p,
