@@ -353,7 +353,7 @@ pub(super) struct LightSubpathChain {
 }
 
 impl LightSubpathChain {
-    fn new(seed: u64, index: u64) -> Self {
+    pub(super) fn new(seed: u64, index: u64) -> Self {
         let counters = ChainCounters::default();
         LightSubpathChain {
             state: PssSampler::new(seed ^ CHAIN_STREAM, index, counters.mutation_size, 1.0),
@@ -365,21 +365,29 @@ impl LightSubpathChain {
         }
     }
 
-    fn memory_bytes(&self) -> usize {
+    pub(super) fn memory_bytes(&self) -> usize {
         self.state.memory_bytes()
             + (self.current.capacity() + self.proposal.capacity()) * size_of::<Contribution>()
             + self.proposer.memory_bytes()
     }
 
-    /// One iteration: a proposal evaluated into `proposal`, taken when visible; the state it
-    /// leaves is added to `gather` with the iterations it was held.
-    fn iterate(
+    /// Starts a pass: no state yet (the targets changed with the camera subpaths).
+    pub(super) fn start_pass(&mut self) {
+        self.current.clear();
+        self.held = 0;
+        self.counters.start_pass();
+    }
+
+    /// One iteration: a proposal evaluated into `proposal`, taken when visible; `leave`
+    /// receives the state it leaves, with the iterations it was held (amcvcm adds it to its
+    /// gather, mvcm records it for its weights).
+    pub(super) fn iterate(
         &mut self,
         setup: &Pass,
         cameras: &CameraVertices,
-        gather: &mut ChainGather,
         large_step_prob: f32,
         st: &mut PassStats,
+        mut leave: impl FnMut(&[Contribution], u32),
     ) {
         let c = &mut self.counters;
         let searching = self.current.is_empty();
@@ -390,7 +398,9 @@ impl LightSubpathChain {
         c.record(searching, self.state.is_large_step(), visible);
         if visible {
             self.state.accept();
-            gather.add(&self.current, self.held as f32, setup.merge_normalization);
+            if self.held > 0 {
+                leave(&self.current, self.held);
+            }
             std::mem::swap(&mut self.current, &mut self.proposal);
             self.held = 0;
         } else {
@@ -400,6 +410,14 @@ impl LightSubpathChain {
             self.held += 1;
             self.counters.chain_samples += 1;
         }
+    }
+
+    /// Ends a pass: `leave` receives the state held.
+    pub(super) fn finish_pass(&mut self, mut leave: impl FnMut(&[Contribution], u32)) {
+        if self.held > 0 {
+            leave(&self.current, self.held);
+        }
+        self.held = 0;
     }
 }
 
@@ -507,17 +525,17 @@ impl MetropolisLightSubpaths {
                 let iterations = worker_share(light_paths, count, i);
                 let mut gather = ChainGather::new(pixels);
                 let mut st = PassStats::default();
-                chain.current.clear();
-                chain.held = 0;
-                chain.counters.start_pass();
+                let norm = setup.merge_normalization;
+                chain.start_pass();
                 for j in 0..iterations {
                     if j % 256 == 0 && cancel.load(Ordering::Relaxed) {
                         return Err(Cancelled);
                     }
-                    chain.iterate(setup, cameras, &mut gather, large_step_prob, &mut st);
+                    chain.iterate(setup, cameras, large_step_prob, &mut st, |state, held| {
+                        gather.add(state, held as f32, norm)
+                    });
                 }
-                gather.add(&chain.current, chain.held as f32, setup.merge_normalization);
-                chain.held = 0;
+                chain.finish_pass(|state, held| gather.add(state, held as f32, norm));
                 gather.scale(chain.counters.scale(iterations) as f32);
                 Ok((gather, st))
             })

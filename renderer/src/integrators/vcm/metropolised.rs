@@ -42,7 +42,7 @@
 //! iterations in a pixel or two the robust r otherwise takes for fireflies.
 
 use super::Pass;
-use super::metropolis::{CameraVertices, ChainGather, Contribution, Proposer};
+use super::metropolis::{CameraVertices, ChainGather, Contribution, LightSubpathChain, Proposer};
 use crate::integrators::visibility_chain::{
     ChainCounters, ChainHistory, INITIAL_MUTATION_SIZE, one_per_worker, worker_share,
 };
@@ -173,13 +173,14 @@ impl Balance {
 /// One worker's two chains.
 #[derive(Clone, Debug)]
 struct ChainPair {
-    visibility: ChainState,
+    /// amcvcm's chain, with its own proposer and counters.
+    visibility: LightSubpathChain,
     contribution: ChainState,
+    /// The bootstrap's and the contribution chain's proposals.
     proposer: Proposer,
     proposal: Vec<Contribution>,
-    /// Each chain's counters: the visibility chain's are amcvcm's; the contribution chain's
-    /// count its uniform proposals that brought anything, its steps and its mutation size.
-    counters: ChainCounters,
+    /// The contribution chain's counters: its uniform proposals that brought anything, its
+    /// steps and its mutation size.
     contribution_counters: ChainCounters,
     /// This pass: the bootstrap's samples and sum of C, each chain's planned iterations, the
     /// states held (the iterations the visibility chain held a state are its
@@ -193,11 +194,10 @@ struct ChainPair {
 impl ChainPair {
     fn new(seed: u64, index: u64) -> Self {
         ChainPair {
-            visibility: ChainState::new(seed, index),
+            visibility: LightSubpathChain::new(seed, index),
             contribution: ChainState::new(seed, index | CONTRIBUTION_KEY),
             proposer: Proposer::new(seed ^ CHAIN_STREAM, index),
             proposal: Vec::new(),
-            counters: ChainCounters::default(),
             contribution_counters: ChainCounters::default(),
             bootstrap: 0,
             bootstrap_c: 0.0,
@@ -207,10 +207,8 @@ impl ChainPair {
     }
 
     fn memory_bytes(&self) -> usize {
-        let contributions = self.visibility.current.capacity()
-            + self.contribution.current.capacity()
-            + self.proposal.capacity();
-        self.visibility.pss.memory_bytes()
+        let contributions = self.contribution.current.capacity() + self.proposal.capacity();
+        self.visibility.memory_bytes()
             + self.contribution.pss.memory_bytes()
             + self.proposer.memory_bytes()
             + contributions * size_of::<Contribution>()
@@ -227,12 +225,10 @@ impl ChainPair {
         cancel: &AtomicBool,
     ) -> Result<PassStats, Cancelled> {
         let mut st = PassStats::default();
-        self.counters.start_pass();
+        self.visibility.start_pass();
         self.contribution_counters.start_pass();
-        for s in [&mut self.visibility, &mut self.contribution] {
-            s.current.clear();
-            s.held = 0;
-        }
+        self.contribution.current.clear();
+        self.contribution.held = 0;
         (self.bootstrap, self.bootstrap_c) = (0, 0.0);
         self.records.clear();
         let bootstrap = iterations.div_ceil(BOOTSTRAP_SHARE);
@@ -250,7 +246,10 @@ impl ChainPair {
                 self.contribution_step(setup, cameras, large_step_prob, &mut st);
             }
         }
-        self.records.record(&mut self.visibility, Chain::Visibility);
+        let (records, norm) = (&mut self.records, setup.merge_normalization);
+        self.visibility.finish_pass(|state, held| {
+            records.push(state, held, total_c(state, norm), Chain::Visibility)
+        });
         self.records
             .record(&mut self.contribution, Chain::Contribution);
         Ok(st)
@@ -266,8 +265,9 @@ impl ChainPair {
         self.proposer
             .propose(setup, cameras, &mut s.pss, &mut self.proposal, st);
         let c = total_c(&self.proposal, setup.merge_normalization);
-        self.counters.uniform += 1;
-        self.counters.uniform_visible += u64::from(!self.proposal.is_empty());
+        let counters = &mut self.visibility.counters;
+        counters.uniform += 1;
+        counters.uniform_visible += u64::from(!self.proposal.is_empty());
         self.bootstrap += 1;
         self.bootstrap_c += f64::from(c);
         self.records.push(&self.proposal, 1, c, Chain::Uniform);
@@ -280,7 +280,7 @@ impl ChainPair {
         }
     }
 
-    /// One iteration of the visibility chain (amcvcm's).
+    /// One iteration of the visibility chain (amcvcm's), its states recorded for the weights.
     fn visibility_step(
         &mut self,
         setup: &Pass,
@@ -288,25 +288,11 @@ impl ChainPair {
         large_step_prob: f32,
         st: &mut PassStats,
     ) {
-        let s = &mut self.visibility;
-        let searching = s.current.is_empty();
-        self.counters
-            .start_step(&mut s.pss, searching, large_step_prob);
-        self.proposer
-            .propose(setup, cameras, &mut s.pss, &mut self.proposal, st);
-        let visible = !self.proposal.is_empty();
-        self.counters
-            .record(searching, s.pss.is_large_step(), visible);
-        let c = total_c(&self.proposal, setup.merge_normalization);
-        if visible {
-            s.take(&mut self.proposal, c, &mut self.records, Chain::Visibility);
-        } else {
-            s.pss.reject();
-        }
-        if !s.current.is_empty() {
-            s.held += 1;
-            self.counters.chain_samples += 1;
-        }
+        let (records, norm) = (&mut self.records, setup.merge_normalization);
+        self.visibility
+            .iterate(setup, cameras, large_step_prob, st, |state, held| {
+                records.push(state, held, total_c(state, norm), Chain::Visibility)
+            });
     }
 
     /// One iteration of the contribution chain: a uniform sample with probability
@@ -402,8 +388,8 @@ impl ChainPair {
             // n_v p_v / density, with V = 1; contribution: b_B / n_c x n_c p_c / (C density),
             // p_c = C / b~_c.
             let weight = match r.chain {
-                Chain::Visibility if self.counters.chain_samples > 0 => {
-                    let held = self.counters.chain_samples as f64;
+                Chain::Visibility if self.visibility.counters.chain_samples > 0 => {
+                    let held = self.visibility.counters.chain_samples as f64;
                     b_v / held * balance.n_v / balance.b_v / density
                 }
                 Chain::Visibility => 0.0,
@@ -460,7 +446,7 @@ impl MetropolisedLightSubpaths {
     ) -> Result<ChainGather, Cancelled> {
         one_per_worker(&mut self.pairs, |i| ChainPair::new(seed, i));
         self.history
-            .start_pass(self.pairs.iter().map(|p| &p.counters));
+            .start_pass(self.pairs.iter().map(|p| &p.visibility.counters));
         self.contribution_history
             .start_pass(self.pairs.iter().map(|p| &p.contribution_counters));
         let count = self.pairs.len() as u64;
@@ -474,9 +460,9 @@ impl MetropolisedLightSubpaths {
             .collect::<Result<_, _>>()?;
         let b_v = self
             .history
-            .visible_fraction(self.pairs.iter().map(|p| &p.counters));
+            .visible_fraction(self.pairs.iter().map(|p| &p.visibility.counters));
         self.history
-            .end_pass(self.pairs.iter().map(|p| &p.counters));
+            .end_pass(self.pairs.iter().map(|p| &p.visibility.counters));
         self.contribution_history
             .end_pass(self.pairs.iter().map(|p| &p.contribution_counters));
         let (bootstrap, bootstrap_c) = self
@@ -550,7 +536,7 @@ impl MetropolisedLightSubpaths {
     pub fn statistics(&self) -> serde_json::Value {
         let mut s = self
             .history
-            .statistics(self.pairs.iter().map(|p| &p.counters));
+            .statistics(self.pairs.iter().map(|p| &p.visibility.counters));
         let mut c = self
             .contribution_history
             .statistics(self.pairs.iter().map(|p| &p.contribution_counters));
