@@ -161,7 +161,7 @@ pub fn survey(
 /// two spacings of one counts. The side (the axis and sign nearest the normal facing where
 /// the path came from) keeps the far face of a thin wall apart: without it the closet behind
 /// the gap-and-glass scene's partition counted as seen, and with it half the light.
-pub struct SeenCells {
+struct SeenCells {
     cell: f32,
     cells: HashSet<(IVec3, u8)>,
 }
@@ -205,7 +205,7 @@ impl SeenCells {
 
     /// Whether the point `p` on a surface whose normal on the side it is seen or lit from is
     /// `n` is near a camera path's vertex on the same side.
-    pub fn contains(&self, p: Vec3, n: Vec3) -> bool {
+    fn contains(&self, p: Vec3, n: Vec3) -> bool {
         !self.cells.is_empty()
             && self
                 .cells

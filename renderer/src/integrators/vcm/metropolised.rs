@@ -397,6 +397,11 @@ impl ChainPair {
                 Chain::Contribution if balance.n_c > 0.0 => b_b / balance.b_c / density,
                 Chain::Contribution => 0.0,
             };
+            if weight == 0.0 {
+                // The visibility chain with no state held, or the contribution chain where
+                // the weights leave it out (the independent image's).
+                continue;
+            }
             let weight = n * f64::from(r.held) * weight;
             let contributions = &self.records.arena[r.start as usize..(r.start + r.len) as usize];
             gather.add(contributions, weight as f32, merge_normalization);
