@@ -215,8 +215,8 @@ pub struct Vcm {
     /// Per pixel, the passes' estimates and kernel-bias estimates: the image is their mean.
     sums: Vec<PassSums>,
     /// Per pixel, the sum over passes of an unbiased estimate whose noise does not follow the
-    /// chains' (the camera half and mvcm's uniform light subpaths alone), for the error
-    /// estimate's r; empty where there is none.
+    /// contribution chains' (the camera half and mvcm's states weighted without those
+    /// chains), for the error estimate's r; empty where there is none.
     independent_sums: Vec<DVec3>,
     /// The same over odd passes only.
     independent_odd_sums: Vec<DVec3>,
@@ -240,7 +240,8 @@ pub struct Vcm {
 impl Vcm {
     /// The independent image for the error estimate's r (`independent_sums`): per channel
     /// the lower of its odd and even passes' 3 x 3 means, so that its own noise does not
-    /// lift r (empty where there is none).
+    /// lift r (empty where there is none). `robust_reference_sq` takes a 3 x 3 mean of it
+    /// again: the ratios in DESIGN.md 5d were measured with both.
     fn independent_image(&self, width: usize, height: usize) -> Vec<DVec3> {
         if self.independent_sums.is_empty() || self.passes < 2 {
             return Vec::new();
