@@ -50,17 +50,46 @@ fn every_variant_converges_to_the_closed_forms() {
     // sixteenth of its area (a quarter above): 128 passes keep the standard error at 0.35 %.
     // Metropolis photon paths put the photons where that disc is, at the same 128 passes.
     let desc = common::with_orthographic_camera(sphere_with_point_light(64), 0.5);
-    let params = [("photons", 10_000.0), ("radius", 0.1)];
-    for integrator in ["sppm", "amcppm"] {
+    // amcppm weighs its uniform photons and its chains' by their balance heuristic: with
+    // mostly chains (0.05), an even mix (0.5), and its automatic choice.
+    for (integrator, large_step) in [
+        ("sppm", 0.0),
+        ("amcppm", 0.0),
+        ("amcppm", 0.05),
+        ("amcppm", 0.5),
+    ] {
+        let mut params = vec![("photons", 10_000.0), ("radius", 0.1)];
+        if integrator == "amcppm" {
+            params.push(("large_step", large_step));
+        }
         let (img, dropped) = render(desc.clone(), integrator, &params, 128, 24);
         assert_eq!(dropped, 0);
         let m = mean(&img);
-        eprintln!("{integrator}, point-lit sphere, orthographic camera: mean {m}");
+        eprintln!("{integrator} {large_step}, point-lit sphere, orthographic camera: mean {m}");
         assert!(
             (m - 1.0).abs() < 0.015,
-            "{integrator}, point-lit sphere, orthographic camera: mean {m}, exact 1"
+            "{integrator} {large_step}, point-lit sphere, orthographic camera: mean {m}, exact 1"
         );
     }
+}
+
+/// With a uniform proposal at every iteration amcppm is SPPM: the same photons from the same
+/// stream, each weighted 1 by the balance heuristic (no chain states), so the same image.
+#[test]
+fn amcppm_with_only_uniform_proposals_is_sppm() {
+    let params = [("photons", 2_000.0), ("radius", 0.1)];
+    let (sppm, _) = render(sphere_with_point_light(32), "sppm", &params, 8, 16);
+    let mut uniform = params.to_vec();
+    uniform.push(("large_step", 1.0));
+    let (amcppm, _) = render(sphere_with_point_light(32), "amcppm", &uniform, 8, 16);
+    assert!(mean(&sppm) > 0.5);
+    let differ = (sppm.pixels.iter().zip(&amcppm.pixels)).position(|(a, b)| a != b);
+    assert!(
+        differ.is_none(),
+        "pixel {differ:?}: sppm {:?}, amcppm {:?}",
+        differ.map(|i| sppm.pixels[i]),
+        differ.map(|i| amcppm.pixels[i])
+    );
 }
 
 #[test]

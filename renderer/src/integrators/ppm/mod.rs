@@ -225,7 +225,7 @@ pub fn create_amcppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator>
     )
 }
 
-const PHOTON_STREAM: u64 = 0x005e_ed0f_9407_0715;
+pub(super) const PHOTON_STREAM: u64 = 0x005e_ed0f_9407_0715;
 /// Eye paths draw from their own stream, so that next-event estimation at the hit point
 /// (keyed by pixel and pass too) is independent of the jitter and the specular choices.
 const EYE_STREAM: u64 = 0x0e7e_0a7b_5eed_0001;
@@ -608,6 +608,13 @@ impl Integrator for PhotonMapper {
         let mut chosen = vec![("radius", self.initial_radius())];
         if self.photons_automatic {
             chosen.push(("photons", self.settings.photons as f64));
+        }
+        if let Some(m) = self
+            .metropolis
+            .as_ref()
+            .filter(|m| m.large_step_prob == 0.0)
+        {
+            chosen.push(("large_step", f64::from(m.last_large_step)));
         }
         chosen
     }
