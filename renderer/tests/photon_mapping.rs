@@ -585,3 +585,47 @@ fn photons_honour_shading_normals_as_the_path_tracer_does() {
     eprintln!("sppm / pt on the faceted sphere: {ratio:.4}");
     assert!((ratio - 1.0).abs() < 8e-3, "sppm / pt = {ratio}");
 }
+
+/// Where the eye pass leaves its hit points on a plastic (`ppm/hit_points.rs`): on the glass
+/// Cornell box's sphere turned to a rough red plastic (roughness 0.6, alpha 0.36) every eye
+/// path aimed at it stops there; turned to a polished one (roughness 0.2, alpha 0.04, whose
+/// coat's peak times a rare photon made the material spheres' fireflies) none does, and each
+/// goes on beyond it.
+#[test]
+fn eye_paths_stop_on_rough_plastic_and_pass_polished_plastic() {
+    use caustica_renderer::geometry::Ray;
+    use caustica_renderer::integrators::ppm::hit_points::trace_eye_path;
+    use caustica_renderer::material::Material;
+    use caustica_renderer::sampling::sampler::Sampler;
+    let (centre, radius) = (glam::Vec3::new(0.4, 0.4, 0.35), 0.4);
+    for (roughness, stops) in [(0.6, true), (0.2, false)] {
+        let (mut desc, sphere) = cornell_glass_and_its_sphere();
+        desc.materials[sphere] =
+            Material::metallic_roughness(glam::Vec3::new(0.8, 0.1, 0.1), 0.0, roughness);
+        let scene = Scene::build(desc).unwrap();
+        let (mut eye, mut nee) = (Sampler::new(1), Sampler::new(2));
+        let mut rays = 0;
+        for i in 0..64u64 {
+            eye.start_pixel_sample(i, 0);
+            nee.start_pixel_sample(i, 0);
+            let target =
+                centre + glam::Vec3::new(0.02 * (i % 8) as f32, 0.02 * (i / 8) as f32, 0.0);
+            let o = glam::Vec3::new(0.4, 0.4, 3.0);
+            let path = trace_eye_path(
+                &scene,
+                Ray::new(o, (target - o).normalize()),
+                &mut eye,
+                &mut nee,
+                16,
+                &mut rays,
+            );
+            // Past the polished sphere a path may leave through the box's open front.
+            let p = path.hit_point.map(|h| h.si.p);
+            let on_sphere = p.is_some_and(|p| ((p - centre).length() - radius).abs() < 0.01);
+            assert_eq!(
+                on_sphere, stops,
+                "roughness {roughness}, sample {i}: hit point at {p:?}"
+            );
+        }
+    }
+}

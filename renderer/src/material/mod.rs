@@ -91,6 +91,14 @@ impl Bsdf {
         }
     }
 
+    /// The roughness (alpha) of its microfacet lobes, if it has any.
+    pub fn microfacet_alpha(&self) -> Option<f32> {
+        match self {
+            Bsdf::MetallicRoughness(b) => Some(b.distrib.alpha),
+            _ => None,
+        }
+    }
+
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Vec3 {
         match self {
             Bsdf::Diffuse(b) => b.f(wo, wi),
