@@ -52,16 +52,25 @@ fn every_variant_converges_to_the_closed_forms() {
     let desc = common::with_orthographic_camera(sphere_with_point_light(64), 0.5);
     // amcppm weighs its uniform photons and its chains' by their balance heuristic: with
     // mostly chains (0.05) and its automatic choice (ten times the visible fraction of about
-    // a sixteenth: a mix of the two).
-    for (integrator, large_step) in [("sppm", 0.0), ("amcppm", 0.0), ("amcppm", 0.05)] {
-        let mut params = vec![("photons", 10_000.0), ("radius", 0.1)];
+    // a sixteenth: a mix of the two); and with its photons chosen each pass (`photon_budget`,
+    // 10^4 or fewer), whose count, if it changes, the estimate must not notice.
+    let cases = [
+        ("sppm", 0.0, 10_000.0),
+        ("amcppm", 0.0, 10_000.0),
+        ("amcppm", 0.05, 10_000.0),
+        ("amcppm", 0.0, 0.0),
+    ];
+    for (integrator, large_step, photons) in cases {
+        let mut params = vec![("photons", photons), ("radius", 0.1)];
         if integrator == "amcppm" {
             params.push(("large_step", large_step));
         }
         let (img, dropped) = render(desc.clone(), integrator, &params, 128, 24);
         assert_eq!(dropped, 0);
         let m = mean(&img);
-        eprintln!("{integrator} {large_step}, point-lit sphere, orthographic camera: mean {m}");
+        eprintln!(
+            "{integrator} {large_step} {photons}, point-lit sphere, orthographic camera: mean {m}"
+        );
         assert!(
             (m - 1.0).abs() < 0.015,
             "{integrator} {large_step}, point-lit sphere, orthographic camera: mean {m}, exact 1"

@@ -162,6 +162,7 @@ impl MetropolisPhotons {
         let scale = self.balance_scale(mapper.settings.photons);
         gathered.tau.iter_mut().for_each(|t| *t *= scale);
         gathered.tau_inner.iter_mut().for_each(|t| *t *= scale);
+        gathered.tau_sq.iter_mut().for_each(|t| *t *= scale * scale);
         self.history
             .end_pass(self.chains.iter().map(|c| &c.counters));
         Ok(gathered)

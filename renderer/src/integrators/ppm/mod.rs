@@ -25,6 +25,7 @@ mod error;
 pub mod hash_grid;
 pub mod hit_points;
 pub mod metropolis;
+mod photon_budget;
 mod photon_tracing;
 mod pixel_stats;
 
@@ -42,6 +43,7 @@ use glam::{DVec3, Vec2, Vec3};
 use hash_grid::HashGrid;
 use hit_points::{HitPoint, trace_eye_path};
 use metropolis::MetropolisPhotons;
+use photon_budget::{PhotonBudget, PixelPass, photon_range};
 use pixel_stats::{Gathered, PixelStats};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -102,12 +104,13 @@ const PHOTONS: ParamSpec =
     ParamSpec::new("photons", "Photons traced per pass.", 100_000.0, (1.0, 1e7))
         .integer()
         .live();
-/// amcppm's photons: one per pixel unless given (`photons_per_pass`). Measured with
-/// `caustica converge` at 30 s, 128 x 128, three seeds' medians: on gap-glass relMSE 4.8e-3 at
-/// 16,384 a pass against 6.0e-3 at 10^5, its error estimate 1.5 times the truth against 4.2.
+/// amcppm's photons: chosen each pass unless given (`photon_budget`), from one per pixel
+/// (`photons_per_pass`). Measured with `caustica converge` at 30 s, 128 x 128, three seeds'
+/// medians: on gap-glass one per pixel had relMSE 4.8e-3 against 6.0e-3 at 10^5, its error
+/// estimate 1.5 times the truth against 4.2 (DESIGN.md 5b for the chosen count's).
 const PHOTONS_PER_PIXEL: ParamSpec = ParamSpec::new(
     "photons",
-    "Photons traced per pass; 0 picks one per pixel (within 10^4 and 10^6), so that the photon pass and the eye pass cost about the same.",
+    "Photons traced per pass; 0 chooses them each pass: one per pixel at first, then the count whose split of the pass between camera paths and photons leaves the least variance per ray traced, down to an eighth of that.",
     0.0,
     (0.0, 1e7),
 )
@@ -139,8 +142,8 @@ impl PhotonMappingSettings {
 }
 
 /// Photons per pass: one per pixel, so that the photon pass and the eye pass cost about the
-/// same (each is one path per item), within 10^4 and 10^6 (amcppm's default, and what `info`
-/// recommends for the photon mappers).
+/// same (each is one path per item), within 10^4 and 10^6 (amcppm's first pass, and what
+/// `info` recommends for the photon mappers).
 pub fn photons_per_pass(width: u32, height: u32) -> u64 {
     (width as u64 * height as u64).clamp(10_000, 1_000_000)
 }
@@ -171,8 +174,10 @@ pub struct PhotonMapper {
     ctx: RenderContext,
     variant: Variant,
     settings: PhotonMappingSettings,
-    /// Whether `settings.photons` was chosen here (amcppm's 0: one per pixel).
+    /// Whether `settings.photons` is chosen here (amcppm's 0): one per pixel at first, then
+    /// by `budget`.
     photons_automatic: bool,
+    budget: PhotonBudget,
     initial_radius_sq: f64,
     radius_floor_sq: f64,
     pixels: Vec<PixelStats>,
@@ -249,6 +254,7 @@ impl PhotonMapper {
             variant,
             settings,
             photons_automatic,
+            budget: PhotonBudget::default(),
             initial_radius_sq,
             // The radius never falls below a millionth of the scene: f32 positions cannot
             // resolve less, and the grid's cells stay meaningful.
@@ -523,7 +529,7 @@ impl Integrator for PhotonMapper {
         let n = self.pixels.len();
         // A pass holds the eye pass's direct light and, during the photon pass, one `Gathered`
         // per worker plus the merged one (none before the first pass).
-        let gathered = n * (size_of::<u32>() + 2 * size_of::<DVec3>());
+        let gathered = n * (size_of::<u32>() + 2 * size_of::<DVec3>() + size_of::<f64>());
         let pass = n * size_of::<DVec3>() + (self.photon_workers + 1) * gathered;
         size_of_val(self.pixels.as_slice())
             + size_of_val(self.hit_points.as_slice())
@@ -536,6 +542,7 @@ impl Integrator for PhotonMapper {
     fn render_pass(&mut self, pass: u64, cancel: &AtomicBool) -> Result<PassStats, Cancelled> {
         let mut stats = PassStats::default();
         let direct = self.eye_pass(pass, cancel, &mut stats)?;
+        let eye_rays = stats.rays;
         self.update_grid(pass);
         self.photon_workers = rayon::current_num_threads();
         let gathered = match self.metropolis.take() {
@@ -546,8 +553,10 @@ impl Integrator for PhotonMapper {
             }
             None => self.photon_pass(pass, cancel, &mut stats)?,
         };
+        let photon_rays = stats.rays - eye_rays;
         let alpha = self.settings.alpha;
         let photons = self.settings.photons;
+        let mut budget_pixels = Vec::new();
         let global_radius_sq = match self.radii {
             Radii::Global { radius_sq } => Some(radius_sq),
             Radii::PerPixel => None,
@@ -560,6 +569,15 @@ impl Integrator for PhotonMapper {
             let indirect = gathered.tau[i] / area;
             let estimate = direct[i].as_dvec3() + indirect;
             let bias = kernel_bias::pass_bias(gathered.tau[i], gathered.tau_inner[i], area);
+            if self.photons_automatic && self.passes > 0 {
+                let n = self.passes as f64;
+                let lum = |v: DVec3| f64::from(crate::geometry::luminance(v.as_vec3()));
+                budget_pixels.push(PixelPass {
+                    estimate: lum(estimate),
+                    mean: lum(px.passes.estimate_sum) / n,
+                    photon_variance: gathered.tau_sq[i] / (area * area),
+                });
+            }
             px.passes.add(pass, estimate, bias);
             px.direct_sum += direct[i].as_dvec3();
             if global_radius_sq.is_some() {
@@ -575,6 +593,16 @@ impl Integrator for PhotonMapper {
         }
         self.photons_emitted += photons;
         self.passes += 1;
+        if self.photons_automatic {
+            if !budget_pixels.is_empty() {
+                self.budget.observe(budget_pixels.into_iter());
+            }
+            let (w, h) = (self.ctx.camera.width, self.ctx.camera.height);
+            let range = photon_range(photons_per_pass(w, h));
+            self.settings.photons =
+                self.budget
+                    .next(photons, eye_rays, photon_rays, self.passes, range);
+        }
         self.record_radius();
         Ok(stats)
     }

@@ -55,6 +55,11 @@ pub(super) struct Gathered {
     pub(super) tau: Vec<DVec3>,
     /// The part of tau_M from photons within R / 2 (`INNER_RADIUS_RATIO`).
     pub(super) tau_inner: Vec<DVec3>,
+    /// The variance of tau_M's luminance (`photon_budget`): in a worker's part, the sum of its
+    /// photons' squared contributions (the variance of a sum of independent photons); merged
+    /// from several workers, the spread of their parts, which also holds the correlation of a
+    /// Markov chain's photons (each worker's chain is independent of the others').
+    pub(super) tau_sq: Vec<f64>,
 }
 
 impl Gathered {
@@ -63,6 +68,7 @@ impl Gathered {
             m: vec![0; n],
             tau: vec![DVec3::ZERO; n],
             tau_inner: vec![DVec3::ZERO; n],
+            tau_sq: vec![0.0; n],
         }
     }
 
@@ -80,12 +86,23 @@ impl Gathered {
             .par_iter_mut()
             .zip(merged.tau.par_iter_mut())
             .zip(merged.tau_inner.par_iter_mut())
+            .zip(merged.tau_sq.par_iter_mut())
             .enumerate()
-            .for_each(|(i, ((mi, ti), ii))| {
+            .for_each(|(i, (((mi, ti), ii), si))| {
                 for g in &parts {
                     *mi += g.m[i];
                     *ti += g.tau[i];
                     *ii += g.tau_inner[i];
+                    *si += g.tau_sq[i];
+                }
+                // W parts of equal photon counts: Var(sum) = W s^2 with s^2 their sample
+                // variance.
+                let w = parts.len() as f64;
+                if w >= 2.0 {
+                    let lum = |v: DVec3| f64::from(crate::geometry::luminance(v.as_vec3()));
+                    let mean = lum(*ti) / w;
+                    let spread: f64 = parts.iter().map(|g| (lum(g.tau[i]) - mean).powi(2)).sum();
+                    *si = w / (w - 1.0) * spread;
                 }
             });
         merged
@@ -102,6 +119,8 @@ impl Gathered {
         let c = d.pixel as usize;
         self.m[c] += 1;
         self.tau[c] += d.contribution * scale;
+        let luminance = f64::from(crate::geometry::luminance(d.contribution.as_vec3())) * scale;
+        self.tau_sq[c] += luminance * luminance;
         if d.inner {
             self.tau_inner[c] += d.contribution * scale;
         }
