@@ -22,6 +22,7 @@
 //! thread counts differ only in the order of floating-point sums (DESIGN.md section 6).
 
 mod error;
+mod eye_pass;
 pub mod hash_grid;
 pub mod hit_points;
 pub mod metropolis;
@@ -39,9 +40,9 @@ use crate::integrators::{
     RenderContext,
 };
 use crate::sampling::sampler::Sampler;
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec3, Vec3};
 use hash_grid::HashGrid;
-use hit_points::{HitPoint, trace_eye_path};
+use hit_points::HitPoint;
 use metropolis::MetropolisPhotons;
 use photon_budget::{PhotonBudget, PixelPass, photon_range};
 use pixel_stats::{Gathered, PixelStats};
@@ -233,7 +234,7 @@ pub fn create_amcppm(ctx: RenderContext, p: &ParamValues) -> Box<dyn Integrator>
 pub(super) const PHOTON_STREAM: u64 = 0x005e_ed0f_9407_0715;
 /// Eye paths draw from their own stream, so that next-event estimation at the hit point
 /// (keyed by pixel and pass too) is independent of the jitter and the specular choices.
-const EYE_STREAM: u64 = 0x0e7e_0a7b_5eed_0001;
+pub(super) const EYE_STREAM: u64 = 0x0e7e_0a7b_5eed_0001;
 const MAX_HISTORY: usize = 2048;
 
 impl PhotonMapper {
@@ -368,73 +369,6 @@ impl PhotonMapper {
             Radii::Global { radius_sq } => radius_sq,
             Radii::PerPixel => self.pixels[pixel].radius_sq,
         }
-    }
-
-    /// Eye pass: each pixel's direct estimate for this pass (emission seen through specular
-    /// chains plus next-event estimation at the first non-specular vertex), from a camera ray
-    /// with fresh jitter, and the hit points the photons are gathered at: new every pass for
-    /// SPPM and PPPM, the first pass's kept for the whole run by PPM. PPM's direct estimate
-    /// re-jitters too (as SPPM's does): the image's high frequencies (light edges, texture)
-    /// then converge to the pixel integral; only the photon-carried part, the smooth one, is
-    /// point-sampled at the fixed hit points, as in Hachisuka et al. 2008.
-    fn eye_pass(
-        &mut self,
-        pass: u64,
-        cancel: &AtomicBool,
-        stats: &mut PassStats,
-    ) -> Result<Vec<Vec3>, Cancelled> {
-        let width = self.ctx.camera.width as usize;
-        let (scene, camera, seed, max_depth) = (
-            &*self.ctx.scene,
-            &self.ctx.camera,
-            self.ctx.seed,
-            self.settings.max_depth,
-        );
-        let keep_hit_points = self.variant.fixed_hit_points() && pass > 0;
-        let mut direct = vec![Vec3::ZERO; self.pixels.len()];
-        let rows: Vec<PassStats> = direct
-            .par_chunks_mut(width)
-            .zip(self.hit_points.par_chunks_mut(width))
-            .enumerate()
-            .map(|(y, (direct_row, hp_row))| {
-                if cancel.load(Ordering::Relaxed) {
-                    return Err(Cancelled);
-                }
-                let mut sampler = Sampler::new(seed);
-                let mut eye = Sampler::new(seed ^ EYE_STREAM);
-                let mut row = PassStats::default();
-                for x in 0..width {
-                    let pixel = (y * width + x) as u64;
-                    sampler.start_pixel_sample(pixel, pass);
-                    eye.start_pixel_sample(pixel, pass);
-                    let film = Vec2::new(x as f32, y as f32) + eye.get_2d();
-                    let path = trace_eye_path(
-                        scene,
-                        camera.generate_ray(film),
-                        &mut eye,
-                        &mut sampler,
-                        max_depth,
-                        &mut row.rays,
-                    );
-                    let nee = path.hit_point.as_ref().map_or(Vec3::ZERO, |hp| {
-                        hp.direct(scene, &mut sampler, &mut row.rays)
-                    });
-                    direct_row[x] = sanitize(path.emitted + nee).unwrap_or_else(|| {
-                        row.dropped += 1;
-                        Vec3::ZERO
-                    });
-                    if !keep_hit_points {
-                        hp_row[x] = path.hit_point;
-                    }
-                    row.samples += 1;
-                }
-                Ok(row)
-            })
-            .collect::<Result<_, _>>()?;
-        for r in rows {
-            *stats = *stats + r;
-        }
-        Ok(direct)
     }
 
     /// Photon pass: traces `photons` photons and returns what each pixel's hit point gathered.
