@@ -45,7 +45,7 @@ use hash_grid::HashGrid;
 use hit_points::HitPoint;
 use metropolis::MetropolisPhotons;
 use photon_budget::{PhotonBudget, PixelPass, photon_range};
-use pixel_stats::{Gathered, PixelStats};
+use pixel_stats::{Gathered, PixelStats, luminance};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -410,7 +410,7 @@ impl PhotonMapper {
     ) -> Result<Gathered, Cancelled> {
         let n = self.pixels.len();
         let Some((grid, _)) = &self.grid else {
-            return Ok(Gathered::new(n));
+            return Ok(Gathered::new(n, self.photons_automatic));
         };
         let photons = self.settings.photons;
         let count = workers.len().max(1) as u64;
@@ -419,7 +419,7 @@ impl PhotonMapper {
             .enumerate()
             .map(|(c, worker)| {
                 let c = c as u64;
-                let mut gathered = Gathered::new(n);
+                let mut gathered = Gathered::new(n, self.photons_automatic);
                 let mut st = PassStats::default();
                 let range = (c * photons / count)..((c + 1) * photons / count);
                 work(worker, grid, range, &mut gathered, &mut st)?;
@@ -463,7 +463,12 @@ impl Integrator for PhotonMapper {
         let n = self.pixels.len();
         // A pass holds the eye pass's direct light and, during the photon pass, one `Gathered`
         // per worker plus the merged one (none before the first pass).
-        let gathered = n * (size_of::<u32>() + 2 * size_of::<DVec3>() + size_of::<f64>());
+        let variance = if self.photons_automatic {
+            size_of::<f64>()
+        } else {
+            0
+        };
+        let gathered = n * (size_of::<u32>() + 2 * size_of::<DVec3>() + variance);
         let pass = n * size_of::<DVec3>() + (self.photon_workers + 1) * gathered;
         size_of_val(self.pixels.as_slice())
             + size_of_val(self.hit_points.as_slice())
@@ -505,10 +510,9 @@ impl Integrator for PhotonMapper {
             let bias = kernel_bias::pass_bias(gathered.tau[i], gathered.tau_inner[i], area);
             if self.photons_automatic && self.passes > 0 {
                 let n = self.passes as f64;
-                let lum = |v: DVec3| f64::from(crate::geometry::luminance(v.as_vec3()));
                 budget_pixels.push(PixelPass {
-                    estimate: lum(estimate),
-                    mean: lum(px.passes.estimate_sum) / n,
+                    estimate: luminance(estimate),
+                    mean: luminance(px.passes.estimate_sum) / n,
                     photon_variance: gathered.tau_sq[i] / (area * area),
                 });
             }

@@ -58,17 +58,24 @@ pub(super) struct Gathered {
     /// The variance of tau_M's luminance (`photon_budget`): in a worker's part, the sum of its
     /// photons' squared contributions (the variance of a sum of independent photons); merged
     /// from several workers, the spread of their parts, which also holds the correlation of a
-    /// Markov chain's photons (each worker's chain is independent of the others').
+    /// Markov chain's photons (each worker's chain is independent of the others'). Empty
+    /// unless the photon count is automatic: nothing else reads it.
     pub(super) tau_sq: Vec<f64>,
 }
 
+/// The luminance of a photon mapper's double-precision sums.
+pub(super) fn luminance(v: DVec3) -> f64 {
+    f64::from(crate::geometry::luminance(v.as_vec3()))
+}
+
 impl Gathered {
-    pub(super) fn new(n: usize) -> Self {
+    /// An empty gather of `n` pixels, with `tau_sq` kept only when `variance` is asked for.
+    pub(super) fn new(n: usize, variance: bool) -> Self {
         Gathered {
             m: vec![0; n],
             tau: vec![DVec3::ZERO; n],
             tau_inner: vec![DVec3::ZERO; n],
-            tau_sq: vec![0.0; n],
+            tau_sq: if variance { vec![0.0; n] } else { Vec::new() },
         }
     }
 
@@ -80,31 +87,43 @@ impl Gathered {
     ) -> Gathered {
         use rayon::prelude::*;
         let parts: Vec<&Gathered> = parts.collect();
-        let mut merged = Gathered::new(n);
+        let variance = parts.iter().any(|g| !g.tau_sq.is_empty());
+        let mut merged = Gathered::new(n, variance);
         merged
             .m
             .par_iter_mut()
             .zip(merged.tau.par_iter_mut())
             .zip(merged.tau_inner.par_iter_mut())
-            .zip(merged.tau_sq.par_iter_mut())
             .enumerate()
-            .for_each(|(i, (((mi, ti), ii), si))| {
+            .for_each(|(i, ((mi, ti), ii))| {
                 for g in &parts {
                     *mi += g.m[i];
                     *ti += g.tau[i];
                     *ii += g.tau_inner[i];
-                    *si += g.tau_sq[i];
-                }
-                // W parts of equal photon counts: Var(sum) = W s^2 with s^2 their sample
-                // variance.
-                let w = parts.len() as f64;
-                if w >= 2.0 {
-                    let lum = |v: DVec3| f64::from(crate::geometry::luminance(v.as_vec3()));
-                    let mean = lum(*ti) / w;
-                    let spread: f64 = parts.iter().map(|g| (lum(g.tau[i]) - mean).powi(2)).sum();
-                    *si = w / (w - 1.0) * spread;
                 }
             });
+        if variance {
+            let tau = &merged.tau;
+            merged
+                .tau_sq
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(i, si)| {
+                    // W parts of equal photon counts: Var(sum) = W s^2 with s^2 their sample
+                    // variance; one part keeps its photons' own sum of squares.
+                    let w = parts.len() as f64;
+                    if w >= 2.0 {
+                        let mean = luminance(tau[i]) / w;
+                        let spread: f64 = parts
+                            .iter()
+                            .map(|g| (luminance(g.tau[i]) - mean).powi(2))
+                            .sum();
+                        *si = w / (w - 1.0) * spread;
+                    } else {
+                        *si = parts.iter().map(|g| g.tau_sq[i]).sum();
+                    }
+                });
+        }
         merged
     }
 
@@ -119,8 +138,10 @@ impl Gathered {
         let c = d.pixel as usize;
         self.m[c] += 1;
         self.tau[c] += d.contribution * scale;
-        let luminance = f64::from(crate::geometry::luminance(d.contribution.as_vec3())) * scale;
-        self.tau_sq[c] += luminance * luminance;
+        if !self.tau_sq.is_empty() {
+            let l = luminance(d.contribution) * scale;
+            self.tau_sq[c] += l * l;
+        }
         if d.inner {
             self.tau_inner[c] += d.contribution * scale;
         }
