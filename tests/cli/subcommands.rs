@@ -89,7 +89,7 @@ fn info_recommends_and_reference_renders_with_the_recommendation() {
     for (scene, expected, reference) in [
         ("assets/cornell-box.gltf", "pt", "pt"),
         ("assets/caustic-pool.gltf", "sppm", "sppm"),
-        ("assets/door.gltf", "mmlt", "bdpt"),
+        ("assets/door.gltf", "amcppm", "bdpt"),
         ("assets/gap-glass.gltf", "amcppm", "bdpt"),
     ] {
         let o = run(&format!("info {scene} --width 64"));
