@@ -49,7 +49,7 @@ const HIDDEN_LIGHTS: f64 = 0.05;
 /// Above this share of the view with a light in direct view, and without strong caustics, the
 /// path tracer wins (Cornell box 69 %, material spheres 87 %). Between `HIDDEN_LIGHTS`
 /// and this no bundled scene lies: the advisor cannot classify such a scene and recommends
-/// the one default measured within 1.5 times of the best on every bundled scene.
+/// the default measured closest to the best across the bundled scenes (amcppm).
 const MOSTLY_LIT: f64 = 0.5;
 /// Below this share of the photons landing where the camera sees, uniform photons are mostly
 /// wasted and photon paths from Metropolis chains (amcppm) pay: measured with `caustica
@@ -115,7 +115,7 @@ impl TransportSurvey {
             "amcppm"
         } else if self.directly_lit < MOSTLY_LIT {
             reasons.push(format!(
-                "{} of what the camera sees has a light in direct view, between the scenes lit through openings (under {}) and those lit mostly directly (over {}), and no strong caustics: no bundled scene has measured which estimator wins here, so the default trusted on all of them (amcppm: photons from Metropolis chains merged at the camera's hit points, their count and the chains' large steps chosen as the run goes)",
+                "{} of what the camera sees has a light in direct view, between the scenes lit through openings (under {}) and those lit mostly directly (over {}), and no strong caustics: no bundled scene has measured which estimator wins here, so the default closest to the best on all of them (amcppm: photons from Metropolis chains merged at the camera's hit points, their count and the chains' large steps chosen as the run goes)",
                 pct(self.directly_lit),
                 pct(HIDDEN_LIGHTS),
                 pct(MOSTLY_LIT)
