@@ -9,7 +9,8 @@
 //! Deviations from the paper, each for a reason:
 //! - Hit points change every pass (SPPM), so the target does too: the visible fraction is
 //!   counted per pass, and a chain starts each pass afresh at its first visible uniform
-//!   sample (an exact draw from the pass's target), not from last pass's state.
+//!   sample (an exact draw from the pass's target), not from last pass's state; that search
+//!   comes before the pass's iterations.
 //! - The small step is Kelemen's (a normal of standard deviation delta per coordinate,
 //!   wrapped, `PssSampler`).
 //! - Uniform samples and mutations are a mixture (`large_step`), not a uniform sample at
@@ -23,7 +24,7 @@
 use super::hash_grid::HashGrid;
 use super::photon_tracing::Deposit;
 use super::pixel_stats::Gathered;
-use super::{PHOTON_STREAM, PhotonMapper};
+use super::{PHOTON_STREAM, PhotonMapper, photons_per_pass};
 use crate::integrators::visibility_chain::{ChainCounters, ChainHistory, automatic_large_step};
 use crate::integrators::{Cancelled, ParamSpec, PassStats, PlotSeries};
 use crate::sampling::pss::{LIGHT_STREAM, PssSampler};
@@ -241,6 +242,23 @@ impl PhotonMapper {
                     chain.counters.record(false, true, visible);
                 }
                 return Ok(());
+            }
+            // The search for the pass's first visible sample comes before the pass's
+            // iterations, not out of them: counted in, a chain that had not found a state
+            // when they ran out deposited nothing, and a pass whose chains all failed lost its
+            // photons' light while its photons counted as emitted (DESIGN.md 5b, "A bias left
+            // at small counts"). Its rays count in the photons' cost all the same
+            // (`photon_budget`). It is capped at a uniform pass's count, past which a chain
+            // that has found nothing searches on within the pass's iterations.
+            let cap = photons_per_pass(self.ctx.camera.width, self.ctx.camera.height);
+            for i in 0..cap {
+                if !chain.current.is_empty() {
+                    break;
+                }
+                if i % 1024 == 0 && cancel.load(Ordering::Relaxed) {
+                    return Err(Cancelled);
+                }
+                chain.iterate(self, grid, gathered, large_step_prob, st);
             }
             for i in photons {
                 if i % 1024 == 0 && cancel.load(Ordering::Relaxed) {
