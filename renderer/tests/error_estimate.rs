@@ -22,8 +22,13 @@
 //! 0.92 to 1.14 at 64, so the fourth checkpoint cost four fifths of the test and told
 //! nothing the third did not.
 //!
-//! A reference rendered for the test has its own error, which adds to the measured one; it is
-//! kept below a tenth of the smallest error it is compared with (the figures are printed).
+//! The door and the caustic pool are compared with their shipped references (the convergence
+//! plots', averaged to 32 x 32): rendering the door's in the test (2048 passes of bdpt at a
+//! maximum depth of 10) cost 15 of the test binary's 1000 thread-seconds and left a noisier
+//! reference (estimated relMSE 4.9e-3, against the shipped one's 1.1e-3 at 128 x 128). The
+//! Cornell box with glass keeps its own (see its test). A reference has its own error, which
+//! adds to the measured one; it is kept below a tenth of the smallest error it is compared
+//! with (the figures are printed).
 
 use crate::common;
 
@@ -275,7 +280,10 @@ fn on_the_mirrored_light_the_photon_mappers_estimate_their_kernel_bias() {
 }
 
 /// The Cornell box with a glass sphere against 4096 passes of the path tracer: a caustic,
-/// a light seen directly and through glass, wall corners and shadow edges.
+/// a light seen directly and through glass, wall corners and shadow edges. At 40 x 40, not
+/// against the shipped reference at 32 x 32: there PPM's estimate came out 2.46 times its
+/// true error at 64 passes (1.29 here), where its fixed hit points, one a pixel for the run,
+/// point-sample the photon-carried part of larger pixels (not yet understood further).
 #[test]
 fn on_cornell_glass_every_estimate_tracks_the_true_error() {
     let scene = asset("cornell-glass.gltf");
@@ -297,32 +305,27 @@ fn on_cornell_glass_every_estimate_tracks_the_true_error() {
     check_bundled("cornell-glass", &scene, &runs, &reference, reference_error);
 }
 
-/// The door scene, lit through a slit (max depth 10 for all, against 2048 passes of bdpt): the
-/// path tracer's error is fireflies, MMLT's chains linger, and PPM's hit points beside the lit
-/// gap gather its photons for the whole run (a kernel bias of the pixel's own, larger than
-/// its converged value).
+/// The door scene, lit through a slit, against its shipped reference: the path tracer's error
+/// is fireflies, MMLT's chains linger, and PPM's hit points beside the lit gap gather its
+/// photons for the whole run (a kernel bias of the pixel's own, larger than its converged
+/// value).
 #[test]
 fn on_the_door_every_estimate_tracks_the_true_error() {
     let scene = asset("door.gltf");
-    let depth = [("max_depth", 10.0)];
-    let (reference, reference_error) = reference_by(&scene, "bdpt", &depth, (32, 32), 2048);
+    let (reference, reference_error) = shipped_reference("door");
     eprintln!("door reference: estimated relMSE {reference_error:.2e}");
-    let photons = [("max_depth", 10.0), ("photons", 20_000.0)];
+    let photons = [("photons", 20_000.0)];
     let runs: [Run; 11] = [
-        ("pt", &depth, &[16, 64, 256]),
-        ("vcm", &depth, &[16, 64]),
-        ("amcvcm", &depth, &[16, 64]),
-        ("mvcm", &depth, &[16, 64]),
+        ("pt", &[], &[16, 64, 256]),
+        ("vcm", &[], &[16, 64]),
+        ("amcvcm", &[], &[16, 64]),
+        ("mvcm", &[], &[16, 64]),
         ("amcppm", &photons, &[16, 64]),
         // Its default: the photon count chosen each pass (`photon_budget`), so the passes
         // whose spread the estimate measures differ in their photons.
-        ("amcppm", &depth, &[16, 64]),
-        ("bdpt", &depth, &[4, 16, 64]),
-        (
-            "mmlt",
-            &[("max_depth", 10.0), ("bootstrap", 30_000.0)],
-            &[16, 64],
-        ),
+        ("amcppm", &[], &[16, 64]),
+        ("bdpt", &[], &[4, 16, 64]),
+        ("mmlt", &[("bootstrap", 30_000.0)], &[16, 64]),
         ("sppm", &photons, &[16, 64]),
         ("pppm", &photons, &[16, 64]),
         ("ppm", &photons, &[16, 64]),
