@@ -246,8 +246,8 @@ impl PhotonMapper {
             // The search for the pass's first visible sample comes before the pass's
             // iterations, not out of them: counted in, a chain that had not found a state
             // when they ran out deposited nothing, and a pass whose chains all failed lost its
-            // photons' light while its photons counted as emitted (DESIGN.md 5b, "A bias left
-            // at small counts"). Its rays count in the photons' cost all the same
+            // photons' light while its photons counted as emitted (DESIGN.md 5b, "A bias at
+            // small counts"). Its rays count in the photons' cost all the same
             // (`photon_budget`). It is capped at a uniform pass's count, past which a chain
             // that has found nothing searches on within the pass's iterations.
             let cap = photons_per_pass(self.ctx.camera.width, self.ctx.camera.height);
