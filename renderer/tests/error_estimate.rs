@@ -355,3 +355,22 @@ fn on_the_caustic_pool_every_estimate_tracks_the_true_error() {
     ];
     check_bundled("caustic-pool", &scene, &runs, &reference, reference_error);
 }
+
+/// The material spheres against their shipped reference (pt): lit by the studio, so that
+/// amcppm's photons bring little, its chosen count falls below a photon pass's floor and
+/// most passes trace none (`photon_budget`; the estimate weighs a photon pass for the passes
+/// it stands for). The path tracer beside it, as the run that has no photons at all.
+#[test]
+fn on_the_material_spheres_amcppm_with_passes_without_photons_tracks_the_true_error() {
+    let scene = asset("material-spheres.gltf");
+    let (reference, reference_error) = shipped_reference("material-spheres");
+    eprintln!("material-spheres reference: estimated relMSE {reference_error:.2e}");
+    let runs: [Run; 2] = [("pt", &[], &[16, 64, 256]), ("amcppm", &[], &[16, 64, 256])];
+    check_bundled(
+        "material-spheres",
+        &scene,
+        &runs,
+        &reference,
+        reference_error,
+    );
+}

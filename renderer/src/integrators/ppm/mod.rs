@@ -44,7 +44,7 @@ use glam::{DVec3, Vec3};
 use hash_grid::HashGrid;
 use hit_points::HitPoint;
 use metropolis::MetropolisPhotons;
-use photon_budget::{PhotonBudget, PixelPass, photon_range};
+use photon_budget::{PhotonBudget, PhotonSchedule, PixelPass, photon_pass_floor, photon_range};
 use pixel_stats::{Gathered, PixelStats, luminance};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -111,7 +111,7 @@ const PHOTONS: ParamSpec =
 /// estimate 1.5 times the truth against 4.2 (DESIGN.md 5b for the chosen count's).
 const PHOTONS_PER_PIXEL: ParamSpec = ParamSpec::new(
     "photons",
-    "Photons traced per pass; 0 chooses them each pass: one per pixel at first, then the count whose split of the pass between camera paths and photons leaves the least variance per ray traced, down to an eighth of that.",
+    "Photons traced per pass; 0 chooses them each pass: one per pixel at first, then the count whose split of the pass between camera paths and photons leaves the least variance per ray traced, down to a sixty-fourth of that on average (below an eighth, passes without photons save theirs up for one that traces at least an eighth).",
     0.0,
     (0.0, 1e7),
 )
@@ -175,10 +175,15 @@ pub struct PhotonMapper {
     ctx: RenderContext,
     variant: Variant,
     settings: PhotonMappingSettings,
-    /// Whether `settings.photons` is chosen here (amcppm's 0): one per pixel at first, then
-    /// by `budget`.
+    /// Whether the photon count is chosen here (amcppm's 0): one per pixel at first, then
+    /// by `budget`; `settings.photons` is then the current photon pass's count, which the
+    /// `schedule` draws from the chosen average, `photon_average`.
     photons_automatic: bool,
     budget: PhotonBudget,
+    photon_average: u64,
+    schedule: PhotonSchedule,
+    /// Passes that traced photons (all of them unless the count is chosen here).
+    photon_passes: u64,
     initial_radius_sq: f64,
     radius_floor_sq: f64,
     pixels: Vec<PixelStats>,
@@ -256,6 +261,9 @@ impl PhotonMapper {
             settings,
             photons_automatic,
             budget: PhotonBudget::default(),
+            photon_average: settings.photons,
+            schedule: PhotonSchedule::default(),
+            photon_passes: 0,
             initial_radius_sq,
             // The radius never falls below a millionth of the scene: f32 positions cannot
             // resolve less, and the grid's cells stay meaningful.
@@ -313,6 +321,12 @@ impl PhotonMapper {
 
     pub fn photons_emitted(&self) -> u64 {
         self.photons_emitted
+    }
+
+    /// Passes that traced photons: all of them, unless the count is chosen each pass and
+    /// fell below a photon pass's floor (`photon_budget`).
+    pub fn photon_passes(&self) -> u64 {
+        self.photon_passes
     }
 
     pub fn radius_history_len(&self) -> usize {
@@ -437,6 +451,18 @@ impl PhotonMapper {
         self.pixels[pixel].indirect(self.photons_emitted)
     }
 
+    /// A pass that traced no photons (`photon_budget`): its estimate is its eye pass's light
+    /// plus the photons' running mean, and its bias estimate their bias's, which the next
+    /// photon pass takes back (error.rs); the radii and the photon statistics stay.
+    fn pass_without_photons(&mut self, pass: u64, direct: &[Vec3]) {
+        let n = self.passes;
+        for (px, d) in self.pixels.iter_mut().zip(direct) {
+            px.add_pass(pass, n, d.as_dvec3(), None);
+        }
+        self.passes += 1;
+        self.record_radius();
+    }
+
     fn record_radius(&mut self) {
         let radii: Vec<f64> = (0..self.pixels.len())
             .filter(|&i| self.hit_points[i].is_some())
@@ -482,6 +508,25 @@ impl Integrator for PhotonMapper {
         let mut stats = PassStats::default();
         let direct = self.eye_pass(pass, cancel, &mut stats)?;
         let eye_rays = stats.rays;
+        // The passes this one's photons stand for (`photon_budget`): the schedule is kept
+        // only once the pass is done, so a cancelled one leaves it as it was.
+        let mut schedule = self.schedule;
+        let stands_for = if self.photons_automatic && self.passes > 0 {
+            let first = photons_per_pass(self.ctx.camera.width, self.ctx.camera.height);
+            match schedule.next(self.photon_average, photon_pass_floor(first)) {
+                Some((photons, passes)) => {
+                    self.settings.photons = photons;
+                    passes
+                }
+                None => {
+                    self.schedule = schedule;
+                    self.pass_without_photons(pass, &direct);
+                    return Ok(stats);
+                }
+            }
+        } else {
+            1
+        };
         self.update_grid(pass);
         self.photon_workers = rayon::current_num_threads();
         let gathered = match self.metropolis.take() {
@@ -509,15 +554,14 @@ impl Integrator for PhotonMapper {
             let estimate = direct[i].as_dvec3() + indirect;
             let bias = kernel_bias::pass_bias(gathered.tau[i], gathered.tau_inner[i], area);
             if self.photons_automatic && self.passes > 0 {
-                let n = self.passes as f64;
                 budget_pixels.push(PixelPass {
                     estimate: luminance(estimate),
-                    mean: luminance(px.passes.estimate_sum) / n,
+                    mean: luminance(px.passes.estimate_sum) / self.passes as f64,
                     photon_variance: gathered.tau_sq[i] / (area * area),
                 });
             }
-            px.passes.add(pass, estimate, bias);
-            px.direct_sum += direct[i].as_dvec3();
+            let photons = Some((indirect, bias, stands_for));
+            px.add_pass(pass, self.passes, direct[i].as_dvec3(), photons);
             if global_radius_sq.is_some() {
                 px.photons_counted += u64::from(gathered.m[i]);
             } else {
@@ -531,15 +575,23 @@ impl Integrator for PhotonMapper {
         }
         self.photons_emitted += photons;
         self.passes += 1;
+        self.photon_passes += 1;
+        self.schedule = schedule;
         if self.photons_automatic {
             if !budget_pixels.is_empty() {
                 self.budget.observe(budget_pixels.into_iter());
             }
             let (w, h) = (self.ctx.camera.width, self.ctx.camera.height);
             let range = photon_range(photons_per_pass(w, h));
-            self.settings.photons =
-                self.budget
-                    .next(photons, eye_rays, photon_rays, self.passes, range);
+            self.photon_average = self.budget.next(
+                self.photon_average,
+                photons,
+                eye_rays,
+                photon_rays,
+                self.passes,
+                range,
+            );
+            self.settings.photons = self.photon_average;
         }
         self.record_radius();
         Ok(stats)
@@ -573,7 +625,7 @@ impl Integrator for PhotonMapper {
     fn automatic(&self) -> Vec<(&'static str, f64)> {
         let mut chosen = vec![("radius", self.initial_radius())];
         if self.photons_automatic {
-            chosen.push(("photons", self.settings.photons as f64));
+            chosen.push(("photons", self.photon_average as f64));
         }
         if let Some(m) = self
             .metropolis
@@ -590,7 +642,13 @@ impl Integrator for PhotonMapper {
     }
 
     fn statistics(&self) -> Option<serde_json::Value> {
-        self.metropolis.as_ref().map(|m| m.statistics())
+        // The passes that traced photons, beside the chains' counters: fewer than the passes
+        // where the chosen count fell below a photon pass's floor (`photon_budget`).
+        self.metropolis.as_ref().map(|m| {
+            let mut statistics = m.statistics();
+            statistics["photon_passes"] = self.photon_passes.into();
+            statistics
+        })
     }
 
     fn set_live_param(&mut self, name: &str, value: f64) {
@@ -604,6 +662,8 @@ impl Integrator for PhotonMapper {
                 } else {
                     value as u64
                 };
+                self.photon_average = self.settings.photons;
+                self.schedule = PhotonSchedule::default();
             }
             "large_step" => {
                 if let Some(m) = &mut self.metropolis {

@@ -27,8 +27,19 @@
 //!
 //! Where photons bring little (the material spheres, lit directly by the studio) this spends
 //! the pass on camera paths; where the image is mostly photons (a caustic) it keeps one per
-//! pixel. The count moves by at most a quarter a pass and stays within an eighth of one photon
-//! per pixel and one.
+//! pixel. The count moves by at most a quarter a photon pass and stays within a sixty-fourth
+//! of one photon per pixel and one.
+//!
+//! Below an eighth of a photon per pixel the count is an average (`PhotonSchedule`): passes
+//! without photons save their share up for one that traces at least that eighth. A photon
+//! pass has costs that do not shrink with its count (amcppm's chains search a few hundred
+//! paths for their first visible state, the grid is built over every hit point, every pixel
+//! is updated): on the material spheres they were a third of a pass at the eighth (DESIGN.md
+//! 5b), and spent every few passes they are a few percent. The rule above holds for the
+//! average: over n passes the photons' variance is a / (n P) whether P photons are traced
+//! every pass or k P every k-th, and their rays b P a pass either way, with a and b measured
+//! on the photon passes. The error estimate weighs a photon pass for the passes it stands for
+//! (`error.rs`).
 
 use crate::error_estimate::REL_MSE_EPSILON;
 
@@ -80,10 +91,12 @@ impl PhotonBudget {
         self.observed += 1;
     }
 
-    /// The next pass's count from this one's (`photons`), the rays its eye and photon parts
-    /// traced, and the allowed `range` (module docs).
+    /// The next average count from the current one (`average`), the count of the photon pass
+    /// just traced (`photons`: the average, or the several passes' worth it saved up), the
+    /// rays its eye and photon parts traced, and the allowed `range` (module docs).
     pub(super) fn next(
         &self,
+        average: u64,
         photons: u64,
         eye_rays: u64,
         photon_rays: u64,
@@ -91,23 +104,54 @@ impl PhotonBudget {
         range: (u64, u64),
     ) -> u64 {
         if passes < FIRST_ADAPTIVE_PASS || self.observed == 0 {
-            return photons.clamp(range.0, range.1);
+            return average.clamp(range.0, range.1);
         }
         let ratio =
             (self.photon_variance * eye_rays as f64) / (self.eye_variance * photon_rays as f64);
-        let step = if ratio.is_nan() {
-            1.0
+        let wanted = if ratio.is_nan() {
+            average as f64
         } else {
-            ratio.sqrt().clamp(1.0 / MAX_STEP, MAX_STEP)
+            photons as f64 * ratio.sqrt()
         };
-        ((photons as f64 * step).round() as u64).clamp(range.0, range.1)
+        let average = average as f64;
+        let next = wanted.clamp(average / MAX_STEP, average * MAX_STEP);
+        (next.round() as u64).clamp(range.0, range.1)
     }
 }
 
-/// The range the count moves in, from the first pass's count (`photons_per_pass`: one per
-/// pixel within 10^4 and 10^6): an eighth of it to it (module docs).
+/// The range the average count moves in, from the first pass's count (`photons_per_pass`: one
+/// per pixel within 10^4 and 10^6): a sixty-fourth of it to it (module docs).
 pub(super) fn photon_range(first: u64) -> (u64, u64) {
-    ((first / 8).max(1), first)
+    ((first / 64).max(1), first)
+}
+
+/// The fewest photons a photon pass traces: an eighth of the first pass's count (module docs).
+pub(super) fn photon_pass_floor(first: u64) -> u64 {
+    (first / 8).max(1)
+}
+
+/// Which passes trace photons (module docs): every pass while the average count is at least a
+/// photon pass's floor; below it, a pass adds the average to what the passes before it saved,
+/// and traces them once they reach the floor.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct PhotonSchedule {
+    saved: f64,
+    passes: u64,
+}
+
+impl PhotonSchedule {
+    /// This pass's photons and the passes they stand for (this one and those before it that
+    /// traced none), or None for a pass without photons.
+    pub(super) fn next(&mut self, average: u64, floor: u64) -> Option<(u64, u64)> {
+        self.saved += average as f64;
+        self.passes += 1;
+        if self.saved < floor as f64 {
+            return None;
+        }
+        let pass = (self.saved.round() as u64, self.passes);
+        *self = PhotonSchedule::default();
+        Some(pass)
+    }
 }
 
 #[cfg(test)]
@@ -132,27 +176,71 @@ mod tests {
         // a step at a time.
         let mut budget = PhotonBudget::default();
         pass(&mut budget, 0.1, 0.008);
-        assert_eq!(budget.next(10_000, 100, 100, 4, range), 10_000, "too early");
-        assert_eq!(budget.next(10_000, 100, 100, 8, range), 12_500, "one step");
+        assert_eq!(
+            budget.next(10_000, 10_000, 100, 100, 4, range),
+            10_000,
+            "too early"
+        );
+        assert_eq!(
+            budget.next(10_000, 10_000, 100, 100, 8, range),
+            12_500,
+            "one step"
+        );
         // Half the variance, photons four times as costly: halve, a step at a time.
         let mut budget = PhotonBudget::default();
         pass(&mut budget, 0.1, 0.005);
-        assert_eq!(budget.next(10_000, 100, 400, 8, range), 8_000);
+        assert_eq!(budget.next(10_000, 10_000, 100, 400, 8, range), 8_000);
         // At the optimum it stays: variance ratio 4, cost ratio 4.
         let mut budget = PhotonBudget::default();
         pass(&mut budget, 0.1, 0.008);
-        assert_eq!(budget.next(10_000, 100, 400, 8, range), 10_000);
+        assert_eq!(budget.next(10_000, 10_000, 100, 400, 8, range), 10_000);
         // No photons in the variance: down to the range's floor, never to zero.
         let mut budget = PhotonBudget::default();
         pass(&mut budget, 0.1, 0.0);
-        assert_eq!(budget.next(1_100, 100, 100, 8, range), 1_000);
+        assert_eq!(budget.next(1_100, 1_100, 100, 100, 8, range), 1_000);
         // All of it photons: the eye keeps its floor (ratio 19), so up, within the range.
         let mut budget = PhotonBudget::default();
         pass(&mut budget, 0.1, 0.01);
-        assert_eq!(budget.next(900_000, 100, 100, 8, range), 1_000_000);
+        assert_eq!(budget.next(900_000, 900_000, 100, 100, 8, range), 1_000_000);
         // Nothing measured yet (both zero): no change.
         let mut budget = PhotonBudget::default();
         pass(&mut budget, 0.0, 0.0);
-        assert_eq!(budget.next(5_000, 100, 100, 8, range), 5_000);
+        assert_eq!(budget.next(5_000, 5_000, 100, 100, 8, range), 5_000);
+        // An average of 1,000 traced as 4,000 every fourth pass, whose variance and rays were
+        // measured at 4,000: half the variance, photons 64 times as costly, so the optimum is
+        // 4,000 sqrt(1 / 64) = 500, half the average, which is approached a step at a time.
+        let mut budget = PhotonBudget::default();
+        pass(&mut budget, 0.1, 0.005);
+        assert_eq!(budget.next(1_000, 4_000, 100, 6_400, 8, (1, 10_000)), 800);
+        // From below: 4,000 sqrt(4) = 8,000, eight times the average: a step up.
+        let mut budget = PhotonBudget::default();
+        pass(&mut budget, 0.1, 0.008);
+        assert_eq!(budget.next(1_000, 4_000, 100, 100, 8, (1, 10_000)), 1_250);
+    }
+
+    /// At or above the floor every pass traces the average; below it the passes save up, and
+    /// over many passes the photons traced are the averages' sum (to within one pass's worth).
+    #[test]
+    fn the_schedule_saves_photons_up_to_the_floor() {
+        let mut schedule = PhotonSchedule::default();
+        for average in [1_000, 5_000] {
+            assert_eq!(schedule.next(average, 1_000), Some((average, 1)));
+        }
+        // 300 a pass against a floor of 1,000: every fourth pass traces the 1,200 the four
+        // saved: every pass's photons are traced, none twice.
+        let (mut traced, mut passes_counted, mut photon_passes) = (0, 0, 0);
+        let mut pattern = Vec::new();
+        for _ in 0..1_000 {
+            if let Some((photons, passes)) = schedule.next(300, 1_000) {
+                assert_eq!(photons, 300 * passes, "what the passes saved");
+                traced += photons;
+                passes_counted += passes;
+                photon_passes += 1;
+                pattern.push(passes);
+            }
+        }
+        assert!(pattern.iter().all(|&p| p == 4), "{pattern:?}");
+        assert_eq!(photon_passes, 250);
+        assert_eq!((traced, passes_counted), (300_000, 1_000));
     }
 }

@@ -36,6 +36,52 @@ impl PixelStats {
         self.tau = (self.tau + tau_m) * ratio;
     }
 
+    /// Adds pass `pass`'s one-pass estimate (`error.rs`), after `n` passes: the eye pass's
+    /// `direct` light plus, from a photon pass, its photon part L_M and their bias estimate
+    /// b, standing for k passes (`photons` = (L_M, b, k): itself and the k - 1 before it
+    /// that traced none, `photon_budget`). A pass without photons (`None`) counts the
+    /// photons' running mean m and their bias's, and the photon pass after it
+    /// k L_M - (k - 1) m: the k passes sum to the k L_M the image holds of them, and their
+    /// spread carries the photons' variance as the image does (error.rs).
+    pub(super) fn add_pass(
+        &mut self,
+        pass: u64,
+        n: u64,
+        direct: DVec3,
+        photons: Option<(DVec3, DVec3, u64)>,
+    ) {
+        let (estimate, bias) = match photons {
+            Some((photons, bias, 1)) => (direct + photons, bias),
+            Some((photons, bias, k)) => {
+                let (photon_mean, bias_mean) = self.photon_means(n);
+                let k = k as f64;
+                (
+                    direct + k * photons - (k - 1.0) * photon_mean,
+                    k * bias - (k - 1.0) * bias_mean,
+                )
+            }
+            None => {
+                let (photon_mean, bias_mean) = self.photon_means(n);
+                (direct + photon_mean, bias_mean)
+            }
+        };
+        self.passes.add(pass, estimate, bias);
+        self.direct_sum += direct;
+    }
+
+    /// The means over the `n` passes so far of the photon part of the one-pass estimates and
+    /// of their bias estimates.
+    fn photon_means(&self, n: u64) -> (DVec3, DVec3) {
+        if n == 0 {
+            return (DVec3::ZERO, DVec3::ZERO);
+        }
+        let n = n as f64;
+        (
+            (self.passes.estimate_sum - self.direct_sum) / n,
+            self.passes.bias_sum / n,
+        )
+    }
+
     /// The radiance the photons gathered so far estimate: tau / (pi R^2 N_emitted)
     /// (Hachisuka et al. 2008, eq. 10).
     pub(super) fn indirect(&self, photons_emitted: u64) -> DVec3 {
@@ -151,6 +197,93 @@ impl Gathered {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error_estimate::variance_of_mean;
+
+    /// A run of `blocks` blocks of `k` passes (the first pass a photon pass of its own), each
+    /// block's photons in its last pass: the eye pass's light 1 + e every pass, the photons'
+    /// 2 + p (their bias estimate the same) in the photon passes, e and p uniform with
+    /// standard deviations 0.3 and 1. Returns the image (the mean of the eye passes' light
+    /// plus the photon passes' weighted by the passes they stand for, as SPPM's image
+    /// weighs them by their photons, k times the average), the mean of the one-pass
+    /// estimates and the variance of it their spread gives. `running_mean`: a pass without
+    /// photons adds their running mean (as shipped), else nothing, with k L_M in the photon
+    /// pass.
+    fn run(rng: &mut u64, blocks: u64, k: u64, running_mean: bool) -> (f64, f64, f64) {
+        let mut uniform = |sd: f64| {
+            // xorshift64*, uniform on [-sqrt(3) sd, sqrt(3) sd): variance sd^2.
+            *rng ^= *rng >> 12;
+            *rng ^= *rng << 25;
+            *rng ^= *rng >> 27;
+            let u = (rng.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64;
+            (2.0 * u - 1.0) * 3f64.sqrt() * sd
+        };
+        let mut px = PixelStats::default();
+        let (mut direct, mut photons) = (0.0, 0.0);
+        let mut pass = 0;
+        for block in 0..=blocks {
+            let k = if block == 0 { 1 } else { k };
+            for i in 0..k {
+                let d = 1.0 + uniform(0.3);
+                direct += d;
+                let d = DVec3::splat(d);
+                if i + 1 < k {
+                    if running_mean {
+                        px.add_pass(pass, pass, d, None);
+                    } else {
+                        px.passes.add(pass, d, DVec3::ZERO);
+                        px.direct_sum += d;
+                    }
+                } else {
+                    let p = 2.0 + uniform(1.0);
+                    photons += k as f64 * p;
+                    let l = DVec3::splat(p);
+                    let stands_for = if running_mean { k } else { 1 };
+                    let weight = if running_mean { 1.0 } else { k as f64 };
+                    px.add_pass(pass, pass, d, Some((weight * l, weight * l, stands_for)));
+                }
+                pass += 1;
+            }
+        }
+        let n = pass;
+        let image = (direct + photons) / n as f64;
+        let mean = px.passes.estimate_sum.x / n as f64;
+        let variance = variance_of_mean(px.passes.estimate_sum, px.passes.estimate_sum_sq, n);
+        (image, mean, variance.x)
+    }
+
+    /// Passes without photons (`photon_budget`) keep the one-pass estimates' mean at the
+    /// image and their spread at its variance: over 8,000 runs of 1,025 passes whose photons
+    /// come every fourth, the variance of the mean the sums give is within 7 % of the runs'
+    /// own spread (V_e / n + V_p sum k^2 / n^2). The running mean's own noise adds about
+    /// (k - 1) / k ln(B) / B for B blocks (error.rs), 2 % here (19 % at 16 blocks), and the
+    /// spread's standard error over 8,000 runs is 1.6 %. Counting nothing between photon
+    /// passes and k L_M in them would add the on-and-off of the photons' whole value: about
+    /// four times.
+    #[test]
+    fn passes_without_photons_keep_the_image_and_its_variance() {
+        for running_mean in [true, false] {
+            let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+            let runs: Vec<(f64, f64, f64)> = (0..8_000)
+                .map(|_| run(&mut rng, 256, 4, running_mean))
+                .collect();
+            for &(image, mean, _) in &runs {
+                assert!((image - mean).abs() < 1e-11, "{image} against {mean}");
+            }
+            let m = runs.iter().map(|r| r.0).sum::<f64>() / runs.len() as f64;
+            let spread =
+                runs.iter().map(|r| (r.0 - m).powi(2)).sum::<f64>() / (runs.len() - 1) as f64;
+            let estimated = runs.iter().map(|r| r.2).sum::<f64>() / runs.len() as f64;
+            let ratio = estimated / spread;
+            eprintln!(
+                "running mean {running_mean}: estimated {estimated:.4e}, spread {spread:.4e}"
+            );
+            if running_mean {
+                assert!((ratio - 1.0).abs() < 0.07, "ratio {ratio}");
+            } else {
+                assert!(ratio > 3.0, "ratio {ratio}: the alternative is told apart");
+            }
+        }
+    }
 
     /// Ten million passes of one pixel under a uniform photon density: each pass finds the
     /// photons its shrinking disc holds (1000 at first, about 5 at the end, whole numbers with
