@@ -29,25 +29,23 @@ pub mod metropolis;
 mod photon_budget;
 mod photon_tracing;
 mod pixel_stats;
+mod pixel_update;
 
 use crate::camera::CameraDesc;
 use crate::error_estimate::ErrorEstimate;
 use crate::film::sanitize;
 use crate::image::Image;
-use crate::integrators::kernel_bias;
 use crate::integrators::{
     Cancelled, Integrator, ParamSpec, ParamValues, PassStats, PixelLayer, PlotKind, PlotSeries,
     RenderContext,
 };
-use crate::sampling::sampler::Sampler;
 use glam::{DVec3, Vec3};
 use hash_grid::HashGrid;
 use hit_points::HitPoint;
 use metropolis::MetropolisPhotons;
-use photon_budget::{PhotonBudget, PhotonSchedule, PixelPass, photon_pass_floor, photon_range};
-use pixel_stats::{Gathered, PixelStats, luminance};
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
+use photon_budget::{PhotonBudget, PhotonSchedule, photon_pass_floor};
+use pixel_stats::PixelStats;
+use std::sync::atomic::AtomicBool;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Variant {
@@ -385,90 +383,21 @@ impl PhotonMapper {
         }
     }
 
-    /// Photon pass: traces `photons` photons and returns what each pixel's hit point gathered.
-    fn photon_pass(
-        &self,
-        pass: u64,
-        cancel: &AtomicBool,
-        stats: &mut PassStats,
-    ) -> Result<Gathered, Cancelled> {
-        let mut workers = vec![(); self.photon_workers.max(1)];
-        self.photon_pass_over(&mut workers, stats, |(), grid, photons, gathered, st| {
-            let mut sampler = Sampler::new(self.ctx.seed ^ PHOTON_STREAM);
-            for i in photons {
-                if i % 1024 == 0 && cancel.load(Ordering::Relaxed) {
-                    return Err(Cancelled);
-                }
-                sampler.start_pixel_sample(i, pass);
-                self.trace_photon(grid, &mut sampler, st, &mut |d| gathered.add(&d));
-            }
-            Ok(())
-        })
-    }
-
-    /// What every photon pass shares: the pass's `photons` split into one range per worker,
-    /// each worker's `work` on its range gathering apart, the gathers and counters summed in
-    /// the workers' order (so the image does not depend on scheduling).
-    fn photon_pass_over<T: Send>(
-        &self,
-        workers: &mut [T],
-        stats: &mut PassStats,
-        work: impl Fn(
-            &mut T,
-            &HashGrid,
-            std::ops::Range<u64>,
-            &mut Gathered,
-            &mut PassStats,
-        ) -> Result<(), Cancelled>
-        + Sync,
-    ) -> Result<Gathered, Cancelled> {
-        let n = self.pixels.len();
-        let Some((grid, _)) = &self.grid else {
-            return Ok(Gathered::new(n, self.photons_automatic));
-        };
-        let photons = self.settings.photons;
-        let count = workers.len().max(1) as u64;
-        let results: Vec<(Gathered, PassStats)> = workers
-            .par_iter_mut()
-            .enumerate()
-            .map(|(c, worker)| {
-                let c = c as u64;
-                let mut gathered = Gathered::new(n, self.photons_automatic);
-                let mut st = PassStats::default();
-                let range = (c * photons / count)..((c + 1) * photons / count);
-                work(worker, grid, range, &mut gathered, &mut st)?;
-                Ok((gathered, st))
-            })
-            .collect::<Result<_, _>>()?;
-        for (_, st) in &results {
-            *stats = *stats + *st;
-        }
-        Ok(Gathered::merge(n, results.iter().map(|r| &r.0)))
-    }
-
     /// The photon-carried radiance of a PPM or SPPM pixel: tau / (pi R^2 N_emitted).
     fn indirect(&self, pixel: usize) -> DVec3 {
         self.pixels[pixel].indirect(self.photons_emitted)
     }
 
-    /// A pass that traced no photons (`photon_budget`): its estimate is its eye pass's light
-    /// plus the photons' running mean, and its bias estimate their bias's, which the next
-    /// photon pass takes back (error.rs); the radii and the photon statistics stay.
-    fn pass_without_photons(&mut self, pass: u64, direct: &[Vec3]) {
-        let n = self.passes;
-        for (px, d) in self.pixels.iter_mut().zip(direct) {
-            px.add_pass(pass, n, d.as_dvec3(), None);
-        }
-        self.passes += 1;
-        self.record_radius();
-    }
-
     fn record_radius(&mut self) {
+        // Only the passes the history keeps pay for the radii (a pass over every pixel).
+        if !self.passes.is_multiple_of(self.history_stride) {
+            return;
+        }
         let radii: Vec<f64> = (0..self.pixels.len())
             .filter(|&i| self.hit_points[i].is_some())
             .map(|i| self.radius_sq(i).sqrt())
             .collect();
-        if radii.is_empty() || !self.passes.is_multiple_of(self.history_stride) {
+        if radii.is_empty() {
             return;
         }
         let mean = radii.iter().sum::<f64>() / radii.len() as f64;
@@ -538,62 +467,14 @@ impl Integrator for PhotonMapper {
             None => self.photon_pass(pass, cancel, &mut stats)?,
         };
         let photon_rays = stats.rays - eye_rays;
-        let alpha = self.settings.alpha;
-        let photons = self.settings.photons;
-        let mut budget_pixels = Vec::new();
-        let global_radius_sq = match self.radii {
-            Radii::Global { radius_sq } => Some(radius_sq),
-            Radii::PerPixel => None,
-        };
-        for (i, px) in self.pixels.iter_mut().enumerate() {
-            // This pass's estimate with the radius it gathered with, and its bias estimate
-            // (module docs): both before the radius shrinks.
-            let radius_sq = global_radius_sq.unwrap_or(px.radius_sq);
-            let area = std::f64::consts::PI * radius_sq * photons as f64;
-            let indirect = gathered.tau[i] / area;
-            let estimate = direct[i].as_dvec3() + indirect;
-            let bias = kernel_bias::pass_bias(gathered.tau[i], gathered.tau_inner[i], area);
-            if self.photons_automatic && self.passes > 0 {
-                budget_pixels.push(PixelPass {
-                    estimate: luminance(estimate),
-                    mean: luminance(px.passes.estimate_sum) / self.passes as f64,
-                    photon_variance: gathered.tau_sq[i] / (area * area),
-                });
-            }
-            let photons = Some((indirect, bias, stands_for));
-            px.add_pass(pass, self.passes, direct[i].as_dvec3(), photons);
-            if global_radius_sq.is_some() {
-                px.photons_counted += u64::from(gathered.m[i]);
-            } else {
-                px.add_photons(gathered.m[i], gathered.tau[i], alpha, self.radius_floor_sq);
-            }
-        }
-        if let Radii::Global { radius_sq } = &mut self.radii {
-            // Knaus & Zwicker 2011: the next pass's global radius, eq. 20.
-            let k = (pass + 1) as f64;
-            *radius_sq = (*radius_sq * (k + alpha) / (k + 1.0)).max(self.radius_floor_sq);
-        }
-        self.photons_emitted += photons;
-        self.passes += 1;
-        self.photon_passes += 1;
+        self.update_pixels(
+            pass,
+            &direct,
+            &gathered,
+            stands_for,
+            (eye_rays, photon_rays),
+        );
         self.schedule = schedule;
-        if self.photons_automatic {
-            if !budget_pixels.is_empty() {
-                self.budget.observe(budget_pixels.into_iter());
-            }
-            let (w, h) = (self.ctx.camera.width, self.ctx.camera.height);
-            let range = photon_range(photons_per_pass(w, h));
-            self.photon_average = self.budget.next(
-                self.photon_average,
-                photons,
-                eye_rays,
-                photon_rays,
-                self.passes,
-                range,
-            );
-            self.settings.photons = self.photon_average;
-        }
-        self.record_radius();
         Ok(stats)
     }
 

@@ -3,17 +3,21 @@
 //! power, and deposited at every hit point whose disc holds it from its second hit on (direct
 //! light is next-event estimation's). What it deposits goes to a callback, so that uniform
 //! photons add to a pass's sums at once and Metropolis photons (`metropolis.rs`) can be kept
-//! as their chain's state.
+//! as their chain's state. A photon pass splits its photons among the workers, each gathering
+//! into its own buffer, merged in the workers' order.
 
-use super::PhotonMapper;
 use super::hash_grid::HashGrid;
+use super::pixel_stats::Gathered;
+use super::{PHOTON_STREAM, PhotonMapper};
 use crate::geometry::luminance;
 use crate::integrators::kernel_bias::INNER_RADIUS_RATIO;
-use crate::integrators::{PassStats, scatter};
+use crate::integrators::{Cancelled, PassStats, scatter};
 use crate::light::emission::emit_photon;
 use crate::material::TransportMode;
-use crate::sampling::sampler::SampleSource;
+use crate::sampling::sampler::{SampleSource, Sampler};
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A photon's contribution to one hit point: `contribution` is beta f flux (before any
 /// normalisation), `inner` whether it lies within the inner disc of the bias estimate.
@@ -87,5 +91,68 @@ impl PhotonMapper {
             }
             ray = next.ray;
         }
+    }
+}
+
+impl PhotonMapper {
+    /// Photon pass: traces `photons` photons and returns what each pixel's hit point gathered.
+    pub(super) fn photon_pass(
+        &self,
+        pass: u64,
+        cancel: &AtomicBool,
+        stats: &mut PassStats,
+    ) -> Result<Gathered, Cancelled> {
+        let mut workers = vec![(); self.photon_workers.max(1)];
+        self.photon_pass_over(&mut workers, stats, |(), grid, photons, gathered, st| {
+            let mut sampler = Sampler::new(self.ctx.seed ^ PHOTON_STREAM);
+            for i in photons {
+                if i % 1024 == 0 && cancel.load(Ordering::Relaxed) {
+                    return Err(Cancelled);
+                }
+                sampler.start_pixel_sample(i, pass);
+                self.trace_photon(grid, &mut sampler, st, &mut |d| gathered.add(&d));
+            }
+            Ok(())
+        })
+    }
+
+    /// What every photon pass shares: the pass's `photons` split into one range per worker,
+    /// each worker's `work` on its range gathering apart, the gathers and counters summed in
+    /// the workers' order (so the image does not depend on scheduling).
+    pub(super) fn photon_pass_over<T: Send>(
+        &self,
+        workers: &mut [T],
+        stats: &mut PassStats,
+        work: impl Fn(
+            &mut T,
+            &HashGrid,
+            std::ops::Range<u64>,
+            &mut Gathered,
+            &mut PassStats,
+        ) -> Result<(), Cancelled>
+        + Sync,
+    ) -> Result<Gathered, Cancelled> {
+        let n = self.pixels.len();
+        let Some((grid, _)) = &self.grid else {
+            return Ok(Gathered::new(n, self.photons_automatic));
+        };
+        let photons = self.settings.photons;
+        let count = workers.len().max(1) as u64;
+        let results: Vec<(Gathered, PassStats)> = workers
+            .par_iter_mut()
+            .enumerate()
+            .map(|(c, worker)| {
+                let c = c as u64;
+                let mut gathered = Gathered::new(n, self.photons_automatic);
+                let mut st = PassStats::default();
+                let range = (c * photons / count)..((c + 1) * photons / count);
+                work(worker, grid, range, &mut gathered, &mut st)?;
+                Ok((gathered, st))
+            })
+            .collect::<Result<_, _>>()?;
+        for (_, st) in &results {
+            *stats = *stats + *st;
+        }
+        Ok(Gathered::merge(n, results.iter().map(|r| &r.0)))
     }
 }
