@@ -321,12 +321,6 @@ impl PhotonMapper {
         self.photons_emitted
     }
 
-    /// Passes that traced photons: all of them, unless the count is chosen each pass and
-    /// fell below a photon pass's floor (`photon_budget`).
-    pub fn photon_passes(&self) -> u64 {
-        self.photon_passes
-    }
-
     pub fn radius_history_len(&self) -> usize {
         self.radius_history.len()
     }
