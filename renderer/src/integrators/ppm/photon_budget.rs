@@ -135,7 +135,7 @@ pub(super) fn photon_pass_floor(first: u64) -> u64 {
 /// and traces them once they reach the floor.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct PhotonSchedule {
-    saved: f64,
+    saved: u64,
     passes: u64,
 }
 
@@ -143,12 +143,12 @@ impl PhotonSchedule {
     /// This pass's photons and the passes they stand for (this one and those before it that
     /// traced none), or None for a pass without photons.
     pub(super) fn next(&mut self, average: u64, floor: u64) -> Option<(u64, u64)> {
-        self.saved += average as f64;
+        self.saved += average;
         self.passes += 1;
-        if self.saved < floor as f64 {
+        if self.saved < floor {
             return None;
         }
-        let pass = (self.saved.round() as u64, self.passes);
+        let pass = (self.saved, self.passes);
         *self = PhotonSchedule::default();
         Some(pass)
     }
