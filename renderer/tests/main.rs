@@ -16,4 +16,5 @@ mod loader;
 mod metropolis_light_subpaths;
 mod photon_mapping;
 mod session;
+mod trapped_light;
 mod vertex_merging;

@@ -648,6 +648,7 @@ fn eye_paths_stop_on_rough_plastic_and_pass_polished_plastic() {
                 &mut eye,
                 &mut nee,
                 16,
+                false,
                 &mut rays,
             );
             // Past the polished sphere a path may leave through the box's open front.

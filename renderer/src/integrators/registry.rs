@@ -80,7 +80,7 @@ static REGISTRY: &[IntegratorInfo] = &[
         description: "Hachisuka & Jensen 2011: photon paths from Markov chains whose target is their visibility to this pass's hit points.",
         params: ppm::PhotonMappingSettings::METROPOLIS_PARAMS,
         create: ppm::create_amcppm,
-        bytes_per_pixel: 700,
+        bytes_per_pixel: 900,
     },
     IntegratorInfo {
         name: "vcm",

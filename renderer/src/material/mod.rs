@@ -81,6 +81,19 @@ impl Bsdf {
         matches!(self, Bsdf::Mirror(_) | Bsdf::Dielectric(_))
     }
 
+    /// True when light arriving from `wo` (shading frame) at a smooth dielectric is all
+    /// reflected: beyond the critical angle, total internal reflection. Reciprocal (the
+    /// reflected direction makes the same angle), so a camera path and a photon path through
+    /// the same vertex agree on it (`ppm/trapped_light.rs` relies on that).
+    pub fn totally_reflects(&self, wo: Vec3) -> bool {
+        match self {
+            Bsdf::Dielectric(d) => {
+                d.eta != 1.0 && microfacet::fresnel_dielectric(wo.z, d.eta) >= 1.0
+            }
+            _ => false,
+        }
+    }
+
     /// True when a lobe spreads light over the whole hemisphere (diffuse, or the diffuse
     /// base of a plastic): where photon mapping leaves its hit points (`ppm/hit_points.rs`).
     pub fn has_diffuse_lobe(&self) -> bool {

@@ -3,6 +3,7 @@
 //! (`hit_points.rs`).
 
 use super::hit_points::trace_eye_path;
+use super::trapped_light::SpecularPoint;
 use super::{EYE_STREAM, PhotonMapper};
 use crate::film::sanitize;
 use crate::integrators::{Cancelled, PassStats};
@@ -34,11 +35,21 @@ impl PhotonMapper {
         );
         let keep_hit_points = self.variant.fixed_hit_points() && pass > 0;
         let mut direct = vec![Vec3::ZERO; self.pixels.len()];
+        // Each row's first specular vertices, where merges at them are asked for
+        // (`trapped_light.rs`); empty rows otherwise.
+        let trapped_light = self.trapped.is_some();
+        let mut specular_rows: Vec<&mut [Option<SpecularPoint>]> = match &mut self.trapped {
+            Some(t) => t.points.chunks_mut(width).collect(),
+            None => (0..self.pixels.len().div_ceil(width))
+                .map(|_| &mut [][..])
+                .collect(),
+        };
         let rows: Vec<PassStats> = direct
             .par_chunks_mut(width)
             .zip(self.hit_points.par_chunks_mut(width))
+            .zip(specular_rows.par_iter_mut())
             .enumerate()
-            .map(|(y, (direct_row, hp_row))| {
+            .map(|(y, ((direct_row, hp_row), specular_row))| {
                 if cancel.load(Ordering::Relaxed) {
                     return Err(Cancelled);
                 }
@@ -56,8 +67,12 @@ impl PhotonMapper {
                         &mut eye,
                         &mut sampler,
                         max_depth,
+                        trapped_light,
                         &mut row.rays,
                     );
+                    if trapped_light {
+                        specular_row[x] = path.specular;
+                    }
                     let nee = path.hit_point.as_ref().map_or(Vec3::ZERO, |hp| {
                         hp.direct(scene, &mut sampler, &mut row.rays)
                     });

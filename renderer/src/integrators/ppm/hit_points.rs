@@ -10,6 +10,7 @@
 //! weighted by MIS as in the path tracer) and direct light at the hit point (`HitPoint::direct`:
 //! photons never carry direct light) form the pixel's direct estimate.
 
+use super::trapped_light::SpecularPoint;
 use crate::geometry::Ray;
 use crate::integrators::path_tracer::{found_emission, sample_direct};
 use crate::integrators::scatter;
@@ -96,24 +97,32 @@ impl HitPoint {
     }
 }
 
-/// Result of one eye path: the light it found on the way (module docs), and the hit point.
+/// Result of one eye path: the light it found on the way (module docs), the hit point, and
+/// its first vertex if that is specular (`trapped_light.rs`, when asked for).
 pub struct EyePath {
     pub emitted: Vec3,
     pub hit_point: Option<HitPoint>,
+    pub specular: Option<SpecularPoint>,
 }
 
 /// Traces the eye path of one camera ray: `eye` draws its bounces, `nee` the direct light at
-/// the glossy surfaces it passes (module docs).
+/// the glossy surfaces it passes (module docs). With `trapped_light` the emitter found
+/// through specular vertices only, one of which totally reflected, is left to the merges at
+/// the first vertex, which is returned (`trapped_light.rs`).
 pub fn trace_eye_path(
     scene: &Scene,
     mut ray: Ray,
     eye: &mut Sampler,
     nee: &mut Sampler,
     max_depth: u32,
+    trapped_light: bool,
     rays: &mut u64,
 ) -> EyePath {
     let mut beta = Vec3::ONE;
     let mut emitted = Vec3::ZERO;
+    let mut specular = None;
+    // Every vertex so far specular, and one of them a total internal reflection.
+    let (mut all_specular, mut trapped) = (true, false);
     // The density of the last glossy bounce (None from the camera or a specular one), whose
     // emission is weighted against next-event estimation at the glossy surface.
     let mut bsdf_pdf = None;
@@ -121,13 +130,25 @@ pub fn trace_eye_path(
     for depth in 0..=max_depth {
         *rays += 1;
         let Some(si) = scene.intersect(&ray) else {
-            emitted += beta * found_emission(scene, prev_p, ray.d, None, bsdf_pdf);
+            if !(trapped_light && all_specular && trapped) {
+                emitted += beta * found_emission(scene, prev_p, ray.d, None, bsdf_pdf);
+            }
             break;
         };
         beta *= si.transmittance;
-        emitted += beta * found_emission(scene, prev_p, ray.d, Some(&si), bsdf_pdf);
+        if !(trapped_light && all_specular && trapped) {
+            emitted += beta * found_emission(scene, prev_p, ray.d, Some(&si), bsdf_pdf);
+        }
         let bsdf = scene.bsdf(&si);
         let wo = si.shading.to_local(si.wo);
+        if bsdf.is_delta() {
+            if trapped_light && depth == 0 {
+                specular = SpecularPoint::new(si.p, si.n, si.wo, beta);
+            }
+            trapped |= bsdf.totally_reflects(wo);
+        } else {
+            all_specular = false;
+        }
         if !bsdf.is_delta() {
             let polished = bsdf.microfacet_alpha().is_some_and(|a| a < POLISHED_ALPHA);
             if (bsdf.has_diffuse_lobe() && !polished) || depth == max_depth {
@@ -141,6 +162,7 @@ pub fn trace_eye_path(
                         wo,
                         beta,
                     }),
+                    specular,
                 };
             }
             emitted += beta * sample_direct(scene, &si, &bsdf, wo, nee, rays, true);
@@ -162,5 +184,6 @@ pub fn trace_eye_path(
     EyePath {
         emitted,
         hit_point: None,
+        specular,
     }
 }

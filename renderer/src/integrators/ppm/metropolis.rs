@@ -164,6 +164,7 @@ impl MetropolisPhotons {
         gathered.tau.iter_mut().for_each(|t| *t *= scale);
         gathered.tau_inner.iter_mut().for_each(|t| *t *= scale);
         gathered.tau_sq.iter_mut().for_each(|t| *t *= scale * scale);
+        gathered.trapped.iter_mut().for_each(|t| *t *= scale);
         self.history
             .end_pass(self.chains.iter().map(|c| &c.counters));
         Ok(gathered)

@@ -30,6 +30,7 @@ mod photon_budget;
 mod photon_tracing;
 mod pixel_stats;
 mod pixel_update;
+mod trapped_light;
 
 use crate::camera::CameraDesc;
 use crate::error_estimate::ErrorEstimate;
@@ -46,6 +47,7 @@ use metropolis::MetropolisPhotons;
 use photon_budget::{PhotonBudget, PhotonSchedule, photon_pass_floor};
 use pixel_stats::PixelStats;
 use std::sync::atomic::AtomicBool;
+use trapped_light::{Kernel, TrappedLight};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Variant {
@@ -200,6 +202,9 @@ pub struct PhotonMapper {
     photon_workers: usize,
     /// Metropolis photon paths (`metropolis.rs`) in place of uniform ones.
     metropolis: Option<MetropolisPhotons>,
+    /// Merges at the camera's first specular vertices for light trapped by total internal
+    /// reflection (`trapped_light.rs`).
+    trapped: Option<TrappedLight>,
 }
 
 fn create(ctx: RenderContext, variant: Variant, p: &ParamValues) -> Box<dyn Integrator> {
@@ -288,6 +293,7 @@ impl PhotonMapper {
             grid_builds: 0,
             photon_workers: 0,
             metropolis: None,
+            trapped: None,
             ctx,
         }
     }
@@ -295,6 +301,7 @@ impl PhotonMapper {
     /// The same photon mapper with Metropolis photon paths (`metropolis.rs`).
     pub fn with_metropolis_light_paths(mut self, large_step_prob: f32) -> Self {
         self.metropolis = Some(MetropolisPhotons::new(large_step_prob));
+        self.trapped = Some(TrappedLight::new(self.pixels.len()));
         self
     }
 
@@ -334,6 +341,13 @@ impl PhotonMapper {
     /// radii have shrunk to half of those it was built for. Radii only shrink, so a grid built
     /// for larger discs still finds every candidate; it only gets less selective.
     fn update_grid(&mut self, pass: u64) {
+        if let Some(t) = &mut self.trapped {
+            t.start_pass(Kernel::at(
+                self.photon_passes,
+                self.initial_radius_sq,
+                self.settings.alpha,
+            ));
+        }
         let radii: Vec<f64> = (0..self.pixels.len())
             .map(|i| self.radius_sq(i).sqrt())
             .collect();
@@ -417,13 +431,20 @@ impl Integrator for PhotonMapper {
         } else {
             0
         };
-        let gathered = n * (size_of::<u32>() + 2 * size_of::<DVec3>() + variance);
+        // With merges at specular vertices (`trapped_light.rs`) a gather may hold their sums.
+        let trapped = if self.trapped.is_some() {
+            size_of::<DVec3>()
+        } else {
+            0
+        };
+        let gathered = n * (size_of::<u32>() + 2 * size_of::<DVec3>() + variance + trapped);
         let pass = n * size_of::<DVec3>() + (self.photon_workers + 1) * gathered;
         size_of_val(self.pixels.as_slice())
             + size_of_val(self.hit_points.as_slice())
             + size_of_val(self.radius_history.as_slice())
             + self.grid.as_ref().map_or(0, |(g, _)| g.memory_bytes())
             + self.metropolis.as_ref().map_or(0, |m| m.memory_bytes())
+            + self.trapped.as_ref().map_or(0, |t| t.memory_bytes())
             + pass
     }
 
@@ -481,7 +502,10 @@ impl Integrator for PhotonMapper {
                 let l = match self.radii {
                     // Knaus & Zwicker 2011: the mean of independent photon-map estimates.
                     Radii::Global { .. } => self.pixels[i].passes.estimate_sum / n,
-                    Radii::PerPixel => self.pixels[i].direct_sum / n + self.indirect(i),
+                    Radii::PerPixel => {
+                        (self.pixels[i].direct_sum + self.pixels[i].trapped_sum) / n
+                            + self.indirect(i)
+                    }
                 };
                 if self.passes == 0 {
                     Vec3::ZERO

@@ -20,12 +20,14 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A photon's contribution to one hit point: `contribution` is beta f flux (before any
-/// normalisation), `inner` whether it lies within the inner disc of the bias estimate.
+/// normalisation), `inner` whether it lies within the inner disc of the bias estimate; or,
+/// `trapped`, to a pixel's first specular vertex (`trapped_light.rs`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Deposit {
     pub pixel: u32,
     pub contribution: DVec3,
     pub inner: bool,
+    pub trapped: bool,
 }
 
 impl PhotonMapper {
@@ -38,9 +40,16 @@ impl PhotonMapper {
         deposit: &mut impl FnMut(Deposit),
     ) {
         let scene = &*self.ctx.scene;
-        let Some((_, mut ray, mut flux)) = emit_photon(scene, sampler) else {
+        let Some((light, mut ray, mut flux)) = emit_photon(scene, sampler) else {
             return;
         };
+        // Merging at the camera's specular vertices (`trapped_light.rs`): while every vertex
+        // is specular, once one totally reflected; never for a delta light's photons.
+        let trapped_light = self
+            .trapped
+            .as_ref()
+            .filter(|_| !scene.lights[light].is_delta());
+        let (mut all_specular, mut trapped) = (true, false);
         for depth in 0..self.settings.max_depth {
             st.rays += 1;
             let Some(si) = scene.intersect(&ray) else {
@@ -69,6 +78,7 @@ impl PhotonMapper {
                             pixel: c,
                             contribution,
                             inner: dist_sq <= INNER_RADIUS_RATIO * INNER_RADIUS_RATIO * radius_sq,
+                            trapped: false,
                         });
                     } else {
                         st.dropped += 1;
@@ -80,6 +90,29 @@ impl PhotonMapper {
                 break;
             };
             let new_flux = flux * next.weight;
+            if let Some(t) = trapped_light.filter(|_| all_specular) {
+                if bsdf.is_delta() {
+                    trapped |= bsdf.totally_reflects(wo);
+                    if trapped {
+                        t.merge(
+                            si.p,
+                            si.n,
+                            next.ray.d,
+                            new_flux,
+                            &mut |pixel, contribution| {
+                                deposit(Deposit {
+                                    pixel,
+                                    contribution,
+                                    inner: false,
+                                    trapped: true,
+                                })
+                            },
+                        );
+                    }
+                } else {
+                    all_specular = false;
+                }
+            }
             // Russian roulette on the change of power (pbrt-v4 SPPM, section 13.8.3).
             let q = (1.0 - luminance(new_flux) / luminance(flux).max(f32::MIN_POSITIVE)).max(0.0);
             if sampler.get_1d() < q {

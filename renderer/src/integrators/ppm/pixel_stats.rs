@@ -13,6 +13,9 @@ pub(super) struct PixelStats {
     pub(super) radius_sq: f64,
     pub(super) tau: DVec3,
     pub(super) direct_sum: DVec3,
+    /// Sum over passes of the merges at the first specular vertex (`trapped_light.rs`), a
+    /// photon pass's counted for the passes it stands for.
+    pub(super) trapped_sum: DVec3,
     pub(super) photons_counted: u64,
     /// Sums over passes of the one-pass estimates L_k (PPPM's image is their mean; for all
     /// variants their spread is the noise) and of their kernel-bias estimates.
@@ -107,6 +110,9 @@ pub(super) struct Gathered {
     /// Markov chain's photons (each worker's chain is independent of the others'). Empty
     /// unless the photon count is automatic: nothing else reads it.
     pub(super) tau_sq: Vec<f64>,
+    /// What the merges at the pixels' first specular vertices summed (`trapped_light.rs`);
+    /// empty until a photon merges there.
+    pub(super) trapped: Vec<DVec3>,
 }
 
 /// The luminance of a photon mapper's double-precision sums.
@@ -122,6 +128,7 @@ impl Gathered {
             tau: vec![DVec3::ZERO; n],
             tau_inner: vec![DVec3::ZERO; n],
             tau_sq: if variance { vec![0.0; n] } else { Vec::new() },
+            trapped: Vec::new(),
         }
     }
 
@@ -148,6 +155,14 @@ impl Gathered {
                     *ii += g.tau_inner[i];
                 }
             });
+        if parts.iter().any(|g| !g.trapped.is_empty()) {
+            merged.trapped = vec![DVec3::ZERO; n];
+            for g in parts.iter().filter(|g| !g.trapped.is_empty()) {
+                for (t, s) in merged.trapped.iter_mut().zip(&g.trapped) {
+                    *t += *s;
+                }
+            }
+        }
         if variance {
             let tau = &merged.tau;
             merged
@@ -182,6 +197,13 @@ impl Gathered {
     /// chain's normalisation).
     pub(super) fn add_scaled(&mut self, d: &Deposit, scale: f64) {
         let c = d.pixel as usize;
+        if d.trapped {
+            if self.trapped.is_empty() {
+                self.trapped = vec![DVec3::ZERO; self.m.len()];
+            }
+            self.trapped[c] += d.contribution * scale;
+            return;
+        }
         self.m[c] += 1;
         self.tau[c] += d.contribution * scale;
         if !self.tau_sq.is_empty() {

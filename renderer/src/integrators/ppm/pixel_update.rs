@@ -7,7 +7,7 @@ use super::photon_budget::{PixelPass, photon_range};
 use super::pixel_stats::{Gathered, luminance};
 use super::{PhotonMapper, Radii, photons_per_pass};
 use crate::integrators::kernel_bias;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 impl PhotonMapper {
     /// After a photon pass that stands for `stands_for` passes (`photon_budget`), with the
@@ -33,7 +33,12 @@ impl PhotonMapper {
             // (module docs): both before the radius shrinks.
             let radius_sq = global_radius_sq.unwrap_or(px.radius_sq);
             let area = std::f64::consts::PI * radius_sq * photons as f64;
-            let indirect = gathered.tau[i] / area;
+            let trapped = match (&self.trapped, gathered.trapped.get(i)) {
+                (Some(t), Some(&sum)) => t.radiance(sum, photons),
+                _ => DVec3::ZERO,
+            };
+            px.trapped_sum += trapped * stands_for as f64;
+            let indirect = gathered.tau[i] / area + trapped;
             let estimate = direct[i].as_dvec3() + indirect;
             let bias = kernel_bias::pass_bias(gathered.tau[i], gathered.tau_inner[i], area);
             if self.photons_automatic && self.passes > 0 {
