@@ -10,26 +10,26 @@ use glam::{Affine3A, Quat, Vec3};
 
 use crate::common;
 
-/// A light pipe: a glass bar 1 long and 0.6 square along x, its far end against an emitter
-/// of radiance 1 larger than the end, the camera 0.6 from the near end looking into it off
-/// its axis, the view filled by the end face. Camera rays that cross the bar without meeting
-/// its sides see the emitter by refraction alone; the others are carried to it by total
-/// internal reflection off the sides (the bar's sides are beyond the critical angle for every
+/// A light pipe: a glass bar 2 long and 0.3 square along x, its far end against an emitter of
+/// radiance 1 larger than the end, the camera 0.35 from the near end looking into it a little
+/// off its axis, the view filled by the end face. Camera rays nearly along the axis cross the
+/// bar with at most one reflection off its sides; the others are carried to the emitter by
+/// two or more total internal reflections (the sides are beyond the critical angle for every
 /// ray that entered an end), the paths the merges estimate.
 fn light_pipe() -> SceneDescription {
     let glass = Material::glass(1.5).named("glass");
     let light = Material::emitter(Vec3::ONE, Vec3::ZERO).named("light");
     let v = Vec3::new;
-    let x = -1.02;
+    let x = -2.02;
     SceneDescription {
         name: "light pipe".into(),
         meshes: vec![
             cuboid(
                 "bar",
                 Affine3A::from_scale_rotation_translation(
-                    v(1.0, 0.6, 0.6),
+                    v(2.0, 0.3, 0.3),
                     Quat::IDENTITY,
-                    v(-0.5, 0.0, 0.0),
+                    v(-1.0, 0.0, 0.0),
                 ),
                 0,
             ),
@@ -45,7 +45,7 @@ fn light_pipe() -> SceneDescription {
             ),
         ],
         materials: vec![glass, light],
-        camera: Some(camera_looking(v(0.6, 0.15, 0.1), v(0.0, 0.0, 0.0), 40.0)),
+        camera: Some(camera_looking(v(0.35, 0.06, 0.04), v(0.0, 0.0, 0.0), 40.0)),
         ..Default::default()
     }
 }
@@ -64,23 +64,25 @@ fn central_mean(img: &caustica_renderer::image::Image, size: usize) -> f64 {
 }
 
 /// amcppm's image of the light pipe agrees with the path tracer's over the end face. The
-/// merges carry 29.5 % of that light there (with their estimate left out, the ratio is 0.705
-/// on every seed). Measured over seeds 0 to 3: 0.996, 1.004, 0.986, 0.995, a spread of 0.8 %
-/// a seed, so their mean has a standard error of 0.4 %; the path tracer's 1024 passes through
-/// the smooth bar add little. We allow 1.5 % for the mean, and 3 % (four standard deviations)
-/// for each seed.
+/// merges carry 40.5 % of that light there (with their estimate left out, the ratio is 0.595
+/// on every seed). Their kernel's cone mixes directions of two or more reflections with
+/// directions of fewer, which the camera path counts, so at the default alpha (2/3, the cone
+/// about 0.13 rad after 256 passes) the merged light is 12 % high (ratios 1.042 to 1.075 over
+/// four seeds); with alpha 0.2 the kernel shrinks faster, and after 1024 passes seeds 0 and 1
+/// give 1.004 and 1.010 (the path tracer's seeds 4 and 5 against 3: 1.000 and 0.998). We
+/// allow 2 % a seed and 1.5 % for their mean: a merge off by a tenth fails.
 #[test]
 fn light_carried_by_total_internal_reflection_agrees_with_the_path_tracer() {
     let size = 32;
     let (pt, _) = common::render(light_pipe(), "pt", &[], 1024, size, 3, 0);
     let reference = central_mean(&pt, size as usize);
-    let ratios: Vec<f64> = (0..4)
+    let ratios: Vec<f64> = (0..2)
         .map(|seed| {
             let (amcppm, _) = common::render(
                 light_pipe(),
                 "amcppm",
-                &[("photons", 1e4), ("radius", 0.05)],
-                256,
+                &[("photons", 1e4), ("radius", 0.05), ("alpha", 0.2)],
+                1024,
                 size,
                 seed,
                 0,
@@ -88,9 +90,9 @@ fn light_carried_by_total_internal_reflection_agrees_with_the_path_tracer() {
             central_mean(&amcppm, size as usize) / reference
         })
         .collect();
-    eprintln!("amcppm / pt over the end face, seeds 0 to 3: {ratios:.4?}");
+    eprintln!("amcppm / pt over the end face, seeds 0 and 1: {ratios:.4?}");
     for r in &ratios {
-        assert!((r - 1.0).abs() < 0.03, "amcppm / pt {ratios:?}");
+        assert!((r - 1.0).abs() < 0.02, "amcppm / pt {ratios:?}");
     }
     let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
     assert!(

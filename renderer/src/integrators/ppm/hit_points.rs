@@ -10,7 +10,7 @@
 //! weighted by MIS as in the path tracer) and direct light at the hit point (`HitPoint::direct`:
 //! photons never carry direct light) form the pixel's direct estimate.
 
-use super::trapped_light::SpecularPoint;
+use super::trapped_light::{SpecularPoint, TRAPPED_REFLECTIONS};
 use crate::geometry::Ray;
 use crate::integrators::path_tracer::{found_emission, sample_direct};
 use crate::integrators::scatter;
@@ -106,9 +106,9 @@ pub struct EyePath {
 }
 
 /// Traces the eye path of one camera ray: `eye` draws its bounces, `nee` the direct light at
-/// the glossy surfaces it passes (module docs). With `trapped_light` the emitter found
-/// through specular vertices only, one of which totally reflected, is left to the merges at
-/// the first vertex, which is returned (`trapped_light.rs`).
+/// the glossy surfaces it passes (module docs). With `trapped_light` the first vertex, if
+/// specular, is returned (`trapped_light.rs`), and the emitter found through specular
+/// vertices only, two or more of which totally reflected, is left to the merges there.
 pub fn trace_eye_path(
     scene: &Scene,
     mut ray: Ray,
@@ -121,8 +121,8 @@ pub fn trace_eye_path(
     let mut beta = Vec3::ONE;
     let mut emitted = Vec3::ZERO;
     let mut specular = None;
-    // Every vertex so far specular, and one of them a total internal reflection.
-    let (mut all_specular, mut trapped) = (true, false);
+    // Every vertex so far specular, and how many of them totally reflected.
+    let (mut all_specular, mut trapped) = (true, 0u32);
     // The density of the last glossy bounce (None from the camera or a specular one), whose
     // emission is weighted against next-event estimation at the glossy surface.
     let mut bsdf_pdf = None;
@@ -130,13 +130,13 @@ pub fn trace_eye_path(
     for depth in 0..=max_depth {
         *rays += 1;
         let Some(si) = scene.intersect(&ray) else {
-            if !(trapped_light && all_specular && trapped) {
+            if !(all_specular && trapped >= TRAPPED_REFLECTIONS && specular.is_some()) {
                 emitted += beta * found_emission(scene, prev_p, ray.d, None, bsdf_pdf);
             }
             break;
         };
         beta *= si.transmittance;
-        if !(trapped_light && all_specular && trapped) {
+        if !(all_specular && trapped >= TRAPPED_REFLECTIONS && specular.is_some()) {
             emitted += beta * found_emission(scene, prev_p, ray.d, Some(&si), bsdf_pdf);
         }
         let bsdf = scene.bsdf(&si);
@@ -145,7 +145,7 @@ pub fn trace_eye_path(
             if trapped_light && depth == 0 {
                 specular = SpecularPoint::new(si.p, si.n, si.wo, beta);
             }
-            trapped |= bsdf.totally_reflects(wo);
+            trapped += u32::from(bsdf.totally_reflects(wo));
         } else {
             all_specular = false;
         }

@@ -8,6 +8,7 @@
 
 use super::hash_grid::HashGrid;
 use super::pixel_stats::Gathered;
+use super::trapped_light::TRAPPED_REFLECTIONS;
 use super::{PHOTON_STREAM, PhotonMapper};
 use crate::geometry::luminance;
 use crate::integrators::kernel_bias::INNER_RADIUS_RATIO;
@@ -44,12 +45,12 @@ impl PhotonMapper {
             return;
         };
         // Merging at the camera's specular vertices (`trapped_light.rs`): while every vertex
-        // is specular, once one totally reflected; never for a delta light's photons.
+        // is specular, once two totally reflected; never for a delta light's photons.
         let trapped_light = self
             .trapped
             .as_ref()
             .filter(|_| !scene.lights[light].is_delta());
-        let (mut all_specular, mut trapped) = (true, false);
+        let (mut all_specular, mut trapped) = (true, 0u32);
         for depth in 0..self.settings.max_depth {
             st.rays += 1;
             let Some(si) = scene.intersect(&ray) else {
@@ -92,8 +93,8 @@ impl PhotonMapper {
             let new_flux = flux * next.weight;
             if let Some(t) = trapped_light.filter(|_| all_specular) {
                 if bsdf.is_delta() {
-                    trapped |= bsdf.totally_reflects(wo);
-                    if trapped {
+                    trapped += u32::from(bsdf.totally_reflects(wo));
+                    if trapped >= TRAPPED_REFLECTIONS && t.merges_leaving(si.n, next.ray.d) {
                         t.merge(
                             si.p,
                             si.n,

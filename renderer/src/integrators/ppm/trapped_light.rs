@@ -9,20 +9,21 @@
 //!
 //! Here the path space is split between two techniques by that one property, which both ends
 //! of a path agree on (total internal reflection is reciprocal, `Bsdf::totally_reflects`):
-//! - the camera path counts the emitter it finds through specular vertices only if none of
-//!   them totally reflected (`hit_points::trace_eye_path`);
+//! - the camera path counts the emitter it finds through specular vertices only if fewer
+//!   than two of them totally reflected (`TRAPPED_REFLECTIONS`; `hit_points::trace_eye_path`);
 //! - the others are estimated from photons that left an emitter and met only specular
-//!   vertices, at least one of them a total internal reflection: at each of their scattering
+//!   vertices, at least two of them total internal reflections: at each of their scattering
 //!   events they merge with the camera's first vertices (`SpecularPoint`, one per pixel whose
 //!   camera ray meets a specular surface first) within a disc of radius r on the surface and a
 //!   cone of half-angle theta about the direction to the camera, a kernel density estimate in
 //!   position and direction of the radiance leaving that vertex towards the camera:
 //!
 //! ```text
-//! L(x, w_c) ~ sum_j Phi_j / (pi r^2 * 2 pi (1 - cos theta) * |cos(n, w_c)| * P)
+//! L(x, w_c) ~ sum_j Phi_j / (pi r^2 * 2 pi (1 - cos theta) * cos(n, w_j) * P)
 //! ```
 //!
-//! for P photons a pass. Both kernels shrink with the photon passes k as the 4-D kernel's
+//! for P photons a pass leaving in directions w_j. Where the camera sees the surface at a
+//! grazing angle there is no merge (`MIN_COS`), and the camera path keeps those paths. Both kernels shrink with the photon passes k as the 4-D kernel's
 //! volume does k^(alpha - 1) (each factor as k^((alpha - 1) / 2), the rate of PPPM's disc,
 //! Knaus & Zwicker 2011 eq. 20 in its asymptotic form), so the estimate is consistent. The
 //! light it carries is dim and smooth where it matters (it has passed through many curved
@@ -34,8 +35,22 @@ use super::hash_grid::HashGrid;
 use glam::{DVec3, Vec3};
 use std::sync::OnceLock;
 
+/// Total internal reflections that make a path trapped light. One is not enough: a single
+/// one off a flat face shows a sharp image of the emitter (the caustic pool's light seen
+/// through its slab's bottom), which the camera path samples well and the merges' cone
+/// blurs: merged from one on, three seeds of the pool were twice as far from the reference
+/// at 30 s, with pixels at its edge three times too bright; from two on, as before.
+pub const TRAPPED_REFLECTIONS: u32 = 2;
+
 /// The initial cone's half-angle about the direction to the camera, in radians.
 const INITIAL_HALF_ANGLE: f64 = 0.2;
+
+/// The camera sees a surface at a grazing angle below this cosine (75.5 degrees from its
+/// normal): no merges there, and the camera path keeps all of E S* L. Within the cone the
+/// photons' own cosines, by which each is divided, then stay above 0.05; at grazing views
+/// they approach zero (the first version, dividing by the camera's cosine instead, made the
+/// caustic pool's grazing edge of its slab three times too bright).
+const MIN_COS: f32 = 0.25;
 
 /// A pixel's first camera vertex on a specular surface.
 #[derive(Clone, Copy, Debug)]
@@ -45,23 +60,27 @@ pub struct SpecularPoint {
     pub n: Vec3,
     /// Unit direction from the vertex to the camera.
     pub to_camera: Vec3,
-    /// The camera path's throughput to the vertex over |cos(n, to_camera)|.
-    pub weight: Vec3,
+    /// The camera path's throughput to the vertex.
+    pub beta: Vec3,
+    /// Whether the camera sees the surface's back (from inside a closed dielectric).
+    pub from_back: bool,
 }
 
 impl SpecularPoint {
+    /// The first vertex, unless the camera sees it at a grazing angle (`MIN_COS`).
     pub fn new(p: Vec3, geometric_normal: Vec3, to_camera: Vec3, beta: Vec3) -> Option<Self> {
-        let n = if geometric_normal.dot(to_camera) >= 0.0 {
-            geometric_normal
-        } else {
+        let from_back = geometric_normal.dot(to_camera) < 0.0;
+        let n = if from_back {
             -geometric_normal
+        } else {
+            geometric_normal
         };
-        let cos = n.dot(to_camera);
-        (cos > 1e-4).then(|| SpecularPoint {
+        (n.dot(to_camera) >= MIN_COS).then_some(SpecularPoint {
             p,
             n,
             to_camera,
-            weight: beta / cos,
+            beta,
+            from_back,
         })
     }
 }
@@ -94,6 +113,10 @@ impl Kernel {
 pub struct TrappedLight {
     pub points: Vec<Option<SpecularPoint>>,
     pub kernel: Kernel,
+    /// Whether any point is seen from its surface's back: if none, a photon leaving a surface
+    /// backwards (into a dielectric, or reflected inside it) merges nowhere, and most
+    /// trapped photons' events are such (`merges_leaving`).
+    seen_from_back: bool,
     grid: OnceLock<Option<HashGrid>>,
 }
 
@@ -106,6 +129,7 @@ impl TrappedLight {
                 cos_theta: 1.0,
             },
             grid: OnceLock::new(),
+            seen_from_back: false,
         }
     }
 
@@ -122,6 +146,13 @@ impl TrappedLight {
     pub fn start_pass(&mut self, kernel: Kernel) {
         self.kernel = kernel;
         self.grid = OnceLock::new();
+        self.seen_from_back = self.points.iter().flatten().any(|s| s.from_back);
+    }
+
+    /// Whether a photon leaving a surface of front normal `n` in direction `dir` can merge
+    /// with any point this pass (the test before the grid's).
+    pub fn merges_leaving(&self, n: Vec3, dir: Vec3) -> bool {
+        dir.dot(n) > 0.0 || self.seen_from_back
     }
 
     /// The grid over this pass's points (none when no pixel has one).
@@ -168,7 +199,9 @@ impl TrappedLight {
             {
                 continue;
             }
-            let contribution = (s.weight * flux).as_dvec3();
+            // Radiance is flux per area, solid angle and projected area: each photon is
+            // divided by its own cosine (the camera's differs within the cone).
+            let contribution = (s.beta * flux / dir.dot(s.n)).as_dvec3();
             if contribution.is_finite() {
                 deposit(c, contribution);
             }
