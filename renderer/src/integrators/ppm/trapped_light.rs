@@ -1,6 +1,6 @@
 //! Merging at the camera's first specular vertex, for light trapped by total internal
-//! reflection: paths E S* L (every vertex a smooth dielectric or mirror) with at least one
-//! total internal reflection. No merge or connection reaches them, so the photon mappers had
+//! reflection: paths E S* L (every vertex a smooth dielectric or mirror) with at least two
+//! total internal reflections. No merge or connection reaches them, so the photon mappers had
 //! only the camera path's own hit on the emitter, and where such a path is a light pipe (a
 //! glass slab that carries the light by total internal reflection to a face the camera sees)
 //! the exit direction is a chaotic function of the pixel position: a pixel sees the emitter
@@ -23,9 +23,11 @@
 //! ```
 //!
 //! for P photons a pass leaving in directions w_j. Where the camera sees the surface at a
-//! grazing angle there is no merge (`MIN_COS`), and the camera path keeps those paths. Both kernels shrink with the photon passes k as the 4-D kernel's
-//! volume does k^(alpha - 1) (each factor as k^((alpha - 1) / 2), the rate of PPPM's disc,
-//! Knaus & Zwicker 2011 eq. 20 in its asymptotic form), so the estimate is consistent. The
+//! grazing angle there is no merge (`MIN_COS`), and the camera path keeps those paths. Both
+//! kernels shrink with the photon passes k as the 4-D kernel's volume does k^(alpha - 1)
+//! (the disc's area and the cone's solid angle each as k^((alpha - 1) / 2), the rate of
+//! PPPM's disc, Knaus & Zwicker 2011 eq. 20 in its asymptotic form), so the estimate is
+//! consistent. The
 //! light it carries is dim and smooth where it matters (it has passed through many curved
 //! bounces), so the kernel's bias is small next to the variance it removes. Photons of delta
 //! lights (points, spots, directional lights) do not merge here: the camera path could never
@@ -49,8 +51,8 @@ const INITIAL_HALF_ANGLE: f64 = 0.2;
 /// The camera sees a surface at a grazing angle below this cosine (75.5 degrees from its
 /// normal): no merges there, and the camera path keeps all of E S* L. Within the cone the
 /// photons' own cosines, by which each is divided, then stay above 0.05; at grazing views
-/// they approach zero (the first version, dividing by the camera's cosine instead, made the
-/// caustic pool's grazing edge of its slab three times too bright).
+/// they approach zero. (Dividing by the camera's cosine instead, as the first version did,
+/// is biased wherever the cosine varies across the cone, most at grazing views.)
 const MIN_COS: f32 = 0.25;
 
 /// A pixel's first camera vertex on a specular surface.
