@@ -129,14 +129,16 @@ pub fn trace_eye_path(
     let mut prev_p = ray.o;
     for depth in 0..=max_depth {
         *rays += 1;
+        // Emission found along here is trapped light, the merges' (`trapped_light.rs`).
+        let merged = all_specular && trapped >= TRAPPED_REFLECTIONS && specular.is_some();
         let Some(si) = scene.intersect(&ray) else {
-            if !(all_specular && trapped >= TRAPPED_REFLECTIONS && specular.is_some()) {
+            if !merged {
                 emitted += beta * found_emission(scene, prev_p, ray.d, None, bsdf_pdf);
             }
             break;
         };
         beta *= si.transmittance;
-        if !(all_specular && trapped >= TRAPPED_REFLECTIONS && specular.is_some()) {
+        if !merged {
             emitted += beta * found_emission(scene, prev_p, ray.d, Some(&si), bsdf_pdf);
         }
         let bsdf = scene.bsdf(&si);
